@@ -1,0 +1,1 @@
+//! The esrl library behind the `esrl` command: configs, run folders, training drivers.

@@ -1,0 +1,5 @@
+//! `esrl`: train, evaluate, compare and record humanoid walking controllers.
+
+fn main() {
+    println!("esrl");
+}

@@ -1,0 +1,1 @@
+//! Evolution-strategy population and the hybrid ES-SAC / ES-TD3 / ES-DDPG loop.

@@ -1,0 +1,1 @@
+//! Foxglove-ready MCAP recordings of rollouts.

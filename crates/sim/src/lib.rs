@@ -1,0 +1,1 @@
+//! Rapier multibody humanoid built from URDF, the walking environment and a pendulum sanity task.
