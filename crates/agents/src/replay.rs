@@ -1,0 +1,385 @@
+//! Experience replay that keeps episodes intact and samples sequences for recurrent training.
+//!
+//! Transitions live in a ring of fixed capacity, in the order they were pushed; each slot also
+//! remembers which episode it belongs to and its index inside that episode. A recurrent batch
+//! is `B` windows of `W = burn_in + seq_len` consecutive steps of ONE episode, laid out so that
+//! the training part is always the last `seq_len` steps of the window:
+//!
+//! ```text
+//! t:       0 .. burn_in-1 | burn_in .. W-1
+//! role:    burn-in (mask 0) | trained (mask 1, or 0 past the episode's end)
+//! ```
+//!
+//! The training start is drawn uniformly over every stored transition, so each transition is
+//! the first trained step of a window with equal probability. Where the episode begins less
+//! than `burn_in` steps before the training start, the window is left-padded with zeros and
+//! `reset` marks the episode's first real step: the networks zero their (h, c) there, exactly
+//! as a rollout starts from a zero state. Where the episode ends less than `seq_len` steps
+//! after the start, the window is right-padded and `mask` is 0 on the padding. So a window
+//! never mixes two episodes, burn-in reproduces the recurrent state the policy would have had
+//! (up to the policy having changed since), and terminal transitions are sampled as often as
+//! any other.
+//!
+//! Feed-forward agents draw single transitions (`W = 1`) from the same buffer.
+
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+/// One transition as the environment produced it.
+#[derive(Debug, Clone, Copy)]
+pub struct Transition<'a> {
+    /// Observation the action was taken in, length `obs_dim`.
+    pub obs: &'a [f32],
+    /// Action taken, each entry in [-1, 1], length `act_dim`.
+    pub action: &'a [f32],
+    /// Reward received.
+    pub reward: f32,
+    /// Observation after the step, length `obs_dim`.
+    pub next_obs: &'a [f32],
+    /// The episode ended in a terminal state (a fall): no bootstrapping past it.
+    pub terminated: bool,
+}
+
+/// A batch of `batch` windows of `window` steps; every array is row-major `(B, W, ...)`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SequenceBatch {
+    /// Number of windows `B`.
+    pub batch: usize,
+    /// Steps per window `W = burn_in + seq_len`.
+    pub window: usize,
+    /// Leading steps of each window that only warm up the recurrent state.
+    pub burn_in: usize,
+    /// Observations `(B, W, obs_dim)`.
+    pub obs: Vec<f32>,
+    /// Actions `(B, W, act_dim)`.
+    pub action: Vec<f32>,
+    /// Rewards `(B, W)`.
+    pub reward: Vec<f32>,
+    /// Next observations `(B, W, obs_dim)`.
+    pub next_obs: Vec<f32>,
+    /// 1.0 where the step ended the episode in a terminal state, else 0.0; `(B, W)`.
+    pub terminated: Vec<f32>,
+    /// 1.0 on real trained steps, 0.0 on burn-in and padding; `(B, W)`.
+    pub mask: Vec<f32>,
+    /// True where the recurrent state must be zeroed before the step; `(B, W)`.
+    pub reset: Vec<bool>,
+}
+
+impl SequenceBatch {
+    /// Number of trained (mask 1) steps in the batch.
+    pub fn trained_steps(&self) -> usize {
+        self.mask.iter().filter(|&&m| m > 0.0).count()
+    }
+}
+
+/// Ring buffer of transitions that knows episode boundaries.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+pub struct ReplayBuffer {
+    obs_dim: usize,
+    act_dim: usize,
+    capacity: usize,
+    /// Slots filled so far (≤ capacity).
+    len: usize,
+    /// Slot the next push writes.
+    head: usize,
+    /// Id given to the next episode started.
+    next_episode: u64,
+    /// Whether the last pushed transition ended its episode.
+    episode_open: bool,
+    obs: Vec<f32>,
+    action: Vec<f32>,
+    reward: Vec<f32>,
+    next_obs: Vec<f32>,
+    terminated: Vec<bool>,
+    episode: Vec<u64>,
+    step: Vec<u32>,
+}
+
+impl ReplayBuffer {
+    /// An empty buffer holding at most `capacity` transitions.
+    pub fn new(obs_dim: usize, act_dim: usize, capacity: usize) -> Self {
+        Self {
+            obs_dim,
+            act_dim,
+            capacity,
+            len: 0,
+            head: 0,
+            next_episode: 0,
+            episode_open: false,
+            obs: vec![0.0; capacity * obs_dim],
+            action: vec![0.0; capacity * act_dim],
+            reward: vec![0.0; capacity],
+            next_obs: vec![0.0; capacity * obs_dim],
+            terminated: vec![false; capacity],
+            episode: vec![0; capacity],
+            step: vec![0; capacity],
+        }
+    }
+
+    /// Transitions stored.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// True when nothing is stored.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Maximum number of transitions kept; older ones are overwritten.
+    pub fn capacity(&self) -> usize {
+        self.capacity
+    }
+
+    /// Observation size.
+    pub fn obs_dim(&self) -> usize {
+        self.obs_dim
+    }
+
+    /// Action size.
+    pub fn act_dim(&self) -> usize {
+        self.act_dim
+    }
+
+    /// Marks the end of the current episode (after a terminal or truncated step); the next push
+    /// starts a new one.
+    pub fn end_episode(&mut self) {
+        self.episode_open = false;
+    }
+
+    /// Appends one transition to the current episode, starting a new episode if the previous
+    /// one was ended with [`ReplayBuffer::end_episode`].
+    ///
+    /// # Panics
+    /// If the slices do not have the buffer's dimensions (a programming error, not user input).
+    pub fn push(&mut self, t: Transition<'_>) {
+        assert_eq!(t.obs.len(), self.obs_dim, "obs length");
+        assert_eq!(t.next_obs.len(), self.obs_dim, "next_obs length");
+        assert_eq!(t.action.len(), self.act_dim, "action length");
+        if self.capacity == 0 {
+            return;
+        }
+        let prev = (self.head + self.capacity - 1) % self.capacity;
+        let step = if self.episode_open && self.len > 0 {
+            self.step[prev] + 1
+        } else {
+            self.next_episode += 1;
+            0
+        };
+        let i = self.head;
+        let (o, a) = (self.obs_dim, self.act_dim);
+        self.obs[i * o..(i + 1) * o].copy_from_slice(t.obs);
+        self.next_obs[i * o..(i + 1) * o].copy_from_slice(t.next_obs);
+        self.action[i * a..(i + 1) * a].copy_from_slice(t.action);
+        self.reward[i] = t.reward;
+        self.terminated[i] = t.terminated;
+        self.episode[i] = self.next_episode;
+        self.step[i] = step;
+        self.episode_open = true;
+        self.head = (self.head + 1) % self.capacity;
+        self.len = (self.len + 1).min(self.capacity);
+    }
+
+    /// Slot of the oldest stored transition.
+    fn oldest(&self) -> usize {
+        if self.len < self.capacity {
+            0
+        } else {
+            self.head
+        }
+    }
+
+    /// Slot `k` positions after slot `i` in push order, if it is stored.
+    fn offset(&self, i: usize, k: isize) -> Option<usize> {
+        let age = (i + self.capacity - self.oldest()) % self.capacity;
+        let target = age as isize + k;
+        if target < 0 || target >= self.len as isize {
+            return None;
+        }
+        Some((self.oldest() + target as usize) % self.capacity)
+    }
+
+    /// Draws `batch` windows of `burn_in + seq_len` steps (see the module docs).
+    ///
+    /// Returns an empty batch when the buffer is empty.
+    pub fn sample_sequences<R: Rng + ?Sized>(
+        &self,
+        rng: &mut R,
+        batch: usize,
+        seq_len: usize,
+        burn_in: usize,
+    ) -> SequenceBatch {
+        let window = burn_in + seq_len;
+        let (o, a) = (self.obs_dim, self.act_dim);
+        let mut out = SequenceBatch {
+            batch,
+            window,
+            burn_in,
+            obs: vec![0.0; batch * window * o],
+            action: vec![0.0; batch * window * a],
+            reward: vec![0.0; batch * window],
+            next_obs: vec![0.0; batch * window * o],
+            terminated: vec![0.0; batch * window],
+            mask: vec![0.0; batch * window],
+            reset: vec![false; batch * window],
+        };
+        if self.is_empty() || window == 0 {
+            out.batch = 0;
+            out.obs.clear();
+            out.action.clear();
+            out.reward.clear();
+            out.next_obs.clear();
+            out.terminated.clear();
+            out.mask.clear();
+            out.reset.clear();
+            return out;
+        }
+        for b in 0..batch {
+            let start = (self.oldest() + rng.random_range(0..self.len)) % self.capacity;
+            let ep = self.episode[start];
+            let mut first_real = true;
+            for t in 0..window {
+                let k = t as isize - burn_in as isize;
+                let Some(i) = self.offset(start, k).filter(|&i| self.episode[i] == ep) else {
+                    continue;
+                };
+                let row = b * window + t;
+                out.obs[row * o..(row + 1) * o].copy_from_slice(&self.obs[i * o..(i + 1) * o]);
+                out.next_obs[row * o..(row + 1) * o]
+                    .copy_from_slice(&self.next_obs[i * o..(i + 1) * o]);
+                out.action[row * a..(row + 1) * a]
+                    .copy_from_slice(&self.action[i * a..(i + 1) * a]);
+                out.reward[row] = self.reward[i];
+                out.terminated[row] = f32::from(u8::from(self.terminated[i]));
+                out.mask[row] = if t >= burn_in { 1.0 } else { 0.0 };
+                // The state restarts at the first real step of the window: from zero at an
+                // episode's first step, otherwise (the episode began before the window was
+                // truncated by the ring's oldest slot) from zero as the best available guess.
+                out.reset[row] = first_real;
+                first_real = false;
+            }
+        }
+        out
+    }
+
+    /// Draws `batch` single transitions uniformly (feed-forward agents): a window of one step.
+    pub fn sample_transitions<R: Rng + ?Sized>(&self, rng: &mut R, batch: usize) -> SequenceBatch {
+        self.sample_sequences(rng, batch, 1, 0)
+    }
+
+    /// Index of slot `i` inside its episode (tests and diagnostics).
+    pub fn episode_step(&self, i: usize) -> u32 {
+        self.step[i]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    /// Pushes episodes whose observation encodes (episode, step) so windows can be checked.
+    fn filled(lengths: &[usize], capacity: usize) -> ReplayBuffer {
+        let mut buf = ReplayBuffer::new(2, 1, capacity);
+        for (e, &n) in lengths.iter().enumerate() {
+            for s in 0..n {
+                // Episode ids start at 1 so that a zero observation marks padding.
+                let obs = [(e + 1) as f32, s as f32];
+                let next = [(e + 1) as f32, (s + 1) as f32];
+                buf.push(Transition {
+                    obs: &obs,
+                    action: &[s as f32],
+                    reward: 1.0,
+                    next_obs: &next,
+                    terminated: s + 1 == n && e % 2 == 0,
+                });
+            }
+            buf.end_episode();
+        }
+        buf
+    }
+
+    #[test]
+    fn windows_stay_inside_one_episode_and_are_consecutive() {
+        let buf = filled(&[3, 20, 1, 7, 12], 1000);
+        let mut rng = ChaCha8Rng::seed_from_u64(1);
+        let batch = buf.sample_sequences(&mut rng, 500, 4, 3);
+        for b in 0..batch.batch {
+            let real: Vec<(f32, f32)> = (0..batch.window)
+                .map(|t| b * batch.window + t)
+                .filter(|&r| batch.obs[r * 2] != 0.0)
+                .map(|r| (batch.obs[r * 2], batch.obs[r * 2 + 1]))
+                .collect();
+            assert!(!real.is_empty());
+            for pair in real.windows(2) {
+                assert_eq!(pair[1].0, pair[0].0, "window mixes episodes");
+                assert_eq!(pair[1].1, pair[0].1 + 1.0, "steps not consecutive");
+            }
+        }
+    }
+
+    #[test]
+    fn burn_in_is_left_padded_and_reset_marks_the_first_real_step() {
+        // One episode of 10 steps: a training start at step 1 with burn-in 3 has one real
+        // burn-in step (step 0), preceded by two padded steps.
+        let buf = filled(&[10], 100);
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let batch = buf.sample_sequences(&mut rng, 400, 2, 3);
+        let mut seen = false;
+        for b in 0..batch.batch {
+            let r0 = b * batch.window;
+            let first_trained = batch.obs[(r0 + 3) * 2 + 1];
+            if first_trained == 1.0 {
+                seen = true;
+                assert_eq!(&batch.reset[r0..r0 + 5], &[false, false, true, false, false]);
+                assert_eq!(&batch.mask[r0..r0 + 5], &[0.0, 0.0, 0.0, 1.0, 1.0]);
+                assert_eq!(batch.obs[(r0 + 2) * 2 + 1], 0.0, "real burn-in step is step 0");
+            }
+            // Exactly one reset per window, at the first real step.
+            let resets = batch.reset[r0..r0 + batch.window].iter().filter(|&&r| r).count();
+            assert_eq!(resets, 1);
+        }
+        assert!(seen, "a window starting at step 1 should have been drawn");
+    }
+
+    #[test]
+    fn windows_past_the_episode_end_are_masked() {
+        let buf = filled(&[2], 10);
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        let batch = buf.sample_sequences(&mut rng, 50, 4, 0);
+        for b in 0..batch.batch {
+            let r0 = b * batch.window;
+            let start = batch.obs[r0 * 2 + 1] as usize;
+            let expect: Vec<f32> = (0..4).map(|t| if start + t < 2 { 1.0 } else { 0.0 }).collect();
+            assert_eq!(&batch.mask[r0..r0 + 4], expect.as_slice());
+        }
+        // Terminal flag of the last step survives.
+        assert!(batch.terminated.contains(&1.0));
+    }
+
+    #[test]
+    fn ring_overwrites_oldest_and_never_joins_across_the_seam() {
+        let buf = filled(&[6, 6, 6], 10);
+        assert_eq!(buf.len(), 10);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let batch = buf.sample_sequences(&mut rng, 300, 3, 2);
+        for b in 0..batch.batch {
+            let r0 = b * batch.window;
+            let eps: Vec<f32> = (0..batch.window)
+                .filter(|t| batch.mask[r0 + t] > 0.0)
+                .map(|t| batch.obs[(r0 + t) * 2])
+                .collect();
+            assert!(eps.windows(2).all(|w| w[0] == w[1]));
+            assert!(eps.iter().all(|&e| e >= 2.0), "the first episode was partly overwritten");
+        }
+    }
+
+    #[test]
+    fn sampling_is_deterministic_for_a_seed() {
+        let buf = filled(&[30, 40], 100);
+        let a = buf.sample_sequences(&mut ChaCha8Rng::seed_from_u64(5), 16, 4, 4);
+        let b = buf.sample_sequences(&mut ChaCha8Rng::seed_from_u64(5), 16, 4, 4);
+        assert_eq!(a, b);
+    }
+}
