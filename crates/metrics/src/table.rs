@@ -240,7 +240,13 @@ fn agent_row(runs: &AgentRuns) -> Result<Table1Row> {
 }
 
 /// The Markdown columns after `Agent` and `Seeds`, with how to read each cell from a row.
-fn markdown_columns(rows: &[Table1Row]) -> Vec<(String, fn(&Table1Row) -> String)> {
+/// Renders one Markdown cell of a row.
+type MarkdownCell = fn(&Table1Row) -> String;
+
+/// Reads one metric cell of a row.
+type CellOf = fn(&Table1Row) -> &Cell;
+
+fn markdown_columns(rows: &[Table1Row]) -> Vec<(String, MarkdownCell)> {
     let track = match rows.iter().find_map(|r| r.track_length) {
         Some(l) => format!("{} m Track Time (s)", trim_number(l)),
         None => "Track Time (s)".into(),
@@ -364,7 +370,7 @@ pub fn actuator_markdown(rows: &[Table1Row]) -> String {
 }
 
 /// The CSV metric keys, in column order, with how to read each cell from a row.
-const CSV_CELLS: &[(&str, fn(&Table1Row) -> &Cell)] = &[
+const CSV_CELLS: &[(&str, CellOf)] = &[
     ("nauc", |r| &r.nauc),
     ("auc", |r| &r.auc),
     ("final_50", |r| &r.final_50),
