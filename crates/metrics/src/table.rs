@@ -87,7 +87,14 @@ impl Cell {
             return "-".into();
         };
         let mut text = match s.sd {
-            Some(sd) => format!("{} ± {}", format_number(s.mean), format_number(sd)),
+            Some(sd) => {
+                let scale = s.mean.abs().max(sd.abs());
+                format!(
+                    "{} ± {}",
+                    format_scaled(s.mean, scale),
+                    format_scaled(sd, scale)
+                )
+            }
             None => format_number(s.mean),
         };
         if s.n < self.seeds {
@@ -98,14 +105,19 @@ impl Cell {
 }
 
 /// Human-readable number: 2 decimals from 1 to 1e5, 4 decimals below 1, scientific
-/// (3 decimals) below 1e-3 and from 1e5 up; `0.00` for zero.
+/// (3 decimals) below 1e-3 and from 1e5 up; `0.00` for zero. In a `mean ± SD` cell both
+/// numbers use the style of the larger magnitude of the two, so they line up.
 pub fn format_number(x: f64) -> String {
-    let a = x.abs();
-    if a == 0.0 {
+    format_scaled(x, x.abs())
+}
+
+/// Formats `x` in the style that [`format_number`] picks for a number of magnitude `scale`.
+fn format_scaled(x: f64, scale: f64) -> String {
+    if scale == 0.0 {
         "0.00".into()
-    } else if !(1e-3..1e5).contains(&a) {
+    } else if !(1e-3..1e5).contains(&scale) {
         format!("{x:.3e}")
-    } else if a < 1.0 {
+    } else if scale < 1.0 {
         format!("{x:.4}")
     } else {
         format!("{x:.2}")

@@ -58,7 +58,11 @@ fn small_window_by_hand() {
         assert!(close(*a, b), "{m:?}");
     }
     assert_eq!(episodes_to_target_window(&c, 4.5, 3).unwrap(), Some(3));
-    assert_eq!(episodes_to_target_window(&c, 5.0, 3).unwrap(), Some(3), "reaching = ≥");
+    assert_eq!(
+        episodes_to_target_window(&c, 5.0, 3).unwrap(),
+        Some(3),
+        "reaching = ≥"
+    );
     assert_eq!(episodes_to_target_window(&c, 1.0, 3).unwrap(), Some(0));
     assert_eq!(episodes_to_target_window(&c, 5.1, 3).unwrap(), None);
 }
@@ -74,7 +78,11 @@ fn trailing_mean_at_the_start_uses_available_values() {
     assert_eq!(episodes_to_target(&ramp, 20.0).unwrap(), Some(40));
     assert_eq!(episodes_to_target(&ramp, 30.0).unwrap(), Some(55));
     assert_eq!(episodes_to_target(&ramp, 74.5).unwrap(), Some(99));
-    assert_eq!(episodes_to_target(&ramp, 74.6).unwrap(), None, "never reached");
+    assert_eq!(
+        episodes_to_target(&ramp, 74.6).unwrap(),
+        None,
+        "never reached"
+    );
 }
 
 #[test]
@@ -88,7 +96,10 @@ fn median_and_method_target() {
     assert!(close(method_target(&even).unwrap(), 0.8 * 6.5));
     // One seed: its own Best-Win-50. Negative medians are scaled as is.
     assert!(close(method_target(&[vec![-10.0]]).unwrap(), -8.0));
-    assert!(close(method_target_with(&[vec![1.0, 5.0, 2.0]], 2, 0.5).unwrap(), 1.75));
+    assert!(close(
+        method_target_with(&[vec![1.0, 5.0, 2.0]], 2, 0.5).unwrap(),
+        1.75
+    ));
 }
 
 #[test]
@@ -122,7 +133,16 @@ fn summary_json_keys_are_exact() {
     let v: serde_json::Value = serde_json::to_value(s).unwrap();
     let mut keys: Vec<&str> = v.as_object().unwrap().keys().map(String::as_str).collect();
     keys.sort_unstable();
-    assert_eq!(keys, ["auc", "best_win_50", "episodes_to_target", "final_50", "nauc"]);
+    assert_eq!(
+        keys,
+        [
+            "auc",
+            "best_win_50",
+            "episodes_to_target",
+            "final_50",
+            "nauc"
+        ]
+    );
     assert!(v["episodes_to_target"].is_null());
     let back: CurveSummary = serde_json::from_value(v).unwrap();
     assert_eq!(back, s);
@@ -142,13 +162,25 @@ fn mean_and_sample_sd() {
 #[test]
 fn empty_and_non_finite_inputs_are_errors() {
     let empty: [f64; 0] = [];
-    for r in [auc(&empty), nauc(&empty), final_50(&empty), best_win_50(&empty), median(&empty)] {
+    for r in [
+        auc(&empty),
+        nauc(&empty),
+        final_50(&empty),
+        best_win_50(&empty),
+        median(&empty),
+    ] {
         assert!(matches!(r, Err(MetricsError::Empty { .. })), "{r:?}");
     }
     assert!(matches!(mean_sd(&empty), Err(MetricsError::Empty { .. })));
-    assert!(matches!(episodes_to_target(&empty, 1.0), Err(MetricsError::Empty { .. })));
+    assert!(matches!(
+        episodes_to_target(&empty, 1.0),
+        Err(MetricsError::Empty { .. })
+    ));
     let no_seeds: [Vec<f64>; 0] = [];
-    assert!(matches!(method_target(&no_seeds), Err(MetricsError::Empty { .. })));
+    assert!(matches!(
+        method_target(&no_seeds),
+        Err(MetricsError::Empty { .. })
+    ));
 
     let nan = [1.0, f64::NAN, 3.0];
     match auc(&nan) {

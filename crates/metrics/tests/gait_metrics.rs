@@ -77,7 +77,11 @@ fn track_time_precedence_and_absence() {
     let mut t = trace();
     t.success_time = Some(0.07);
     let g = gait_metrics(&t, &GaitOptions::default()).unwrap();
-    assert_eq!(g.track_time, Some(0.07), "the environment's success time wins");
+    assert_eq!(
+        g.track_time,
+        Some(0.07),
+        "the environment's success time wins"
+    );
 
     let mut short = trace();
     short.torso_x = vec![0.0, 1.0, 2.0, 3.0];
@@ -90,7 +94,10 @@ fn track_time_precedence_and_absence() {
         track_length: 2.0,
         ..GaitOptions::default()
     };
-    assert_eq!(gait_metrics(&short, &opts).unwrap().track_time, Some(0.025 * 3.0));
+    assert_eq!(
+        gait_metrics(&short, &opts).unwrap().track_time,
+        Some(0.025 * 3.0)
+    );
 }
 
 #[test]
@@ -107,7 +114,10 @@ fn knee_names_come_from_the_caller() {
         right_knee: "lk".into(),
         ..GaitOptions::default()
     };
-    assert!(close(gait_metrics(&t, &opts).unwrap().knee_torque_asymmetry, 0.4));
+    assert!(close(
+        gait_metrics(&t, &opts).unwrap().knee_torque_asymmetry,
+        0.4
+    ));
     // Zero torque on both knees is symmetric, not 0/0.
     for row in &mut t.torques {
         row[1] = 0.0;
@@ -120,12 +130,22 @@ fn knee_names_come_from_the_caller() {
 fn malformed_traces_are_refused() {
     let opts = GaitOptions::default();
     let empty = GaitTrace::new(names(&["left_knee", "right_knee"]), vec![]);
-    assert!(matches!(gait_metrics(&empty, &opts), Err(MetricsError::Empty { .. })));
+    assert!(matches!(
+        gait_metrics(&empty, &opts),
+        Err(MetricsError::Empty { .. })
+    ));
 
     let mut t = trace();
     t.torques[2].pop();
     let e = gait_metrics(&t, &opts).unwrap_err();
-    assert!(matches!(e, MetricsError::LengthMismatch { found: 3, expected: 4, .. }));
+    assert!(matches!(
+        e,
+        MetricsError::LengthMismatch {
+            found: 3,
+            expected: 4,
+            ..
+        }
+    ));
     assert!(e.to_string().contains("torques[2]"), "{e}");
 
     let mut t = trace();
@@ -141,7 +161,10 @@ fn malformed_traces_are_refused() {
 
     let mut t = trace();
     t.forward_velocity[0] = f64::INFINITY;
-    assert!(matches!(gait_metrics(&t, &opts), Err(MetricsError::NonFinite { .. })));
+    assert!(matches!(
+        gait_metrics(&t, &opts),
+        Err(MetricsError::NonFinite { .. })
+    ));
 
     let bad = GaitOptions {
         track_length: 0.0,
