@@ -40,7 +40,8 @@ pub struct Transition<'a> {
     pub terminated: bool,
 }
 
-/// A batch of `batch` windows of `window` steps; every array is row-major `(B, W, ...)`.
+/// A batch of `batch` windows of `window` steps. Every array is time-major, `(W, B, ...)`: row
+/// `t * batch + b` holds step `t` of window `b`, the layout the LSTM consumes.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct SequenceBatch {
     /// Number of windows `B`.
@@ -49,23 +50,28 @@ pub struct SequenceBatch {
     pub window: usize,
     /// Leading steps of each window that only warm up the recurrent state.
     pub burn_in: usize,
-    /// Observations `(B, W, obs_dim)`.
+    /// Observations `(W, B, obs_dim)`.
     pub obs: Vec<f32>,
-    /// Actions `(B, W, act_dim)`.
+    /// Actions `(W, B, act_dim)`.
     pub action: Vec<f32>,
-    /// Rewards `(B, W)`.
+    /// Rewards `(W, B)`.
     pub reward: Vec<f32>,
-    /// Next observations `(B, W, obs_dim)`.
+    /// Next observations `(W, B, obs_dim)`.
     pub next_obs: Vec<f32>,
-    /// 1.0 where the step ended the episode in a terminal state, else 0.0; `(B, W)`.
+    /// 1.0 where the step ended the episode in a terminal state, else 0.0; `(W, B)`.
     pub terminated: Vec<f32>,
-    /// 1.0 on real trained steps, 0.0 on burn-in and padding; `(B, W)`.
+    /// 1.0 on real trained steps, 0.0 on burn-in and padding; `(W, B)`.
     pub mask: Vec<f32>,
-    /// True where the recurrent state must be zeroed before the step; `(B, W)`.
+    /// True where the recurrent state must be zeroed before the step; `(W, B)`.
     pub reset: Vec<bool>,
 }
 
 impl SequenceBatch {
+    /// Row of step `t` of window `b` in the time-major arrays.
+    pub fn row(&self, t: usize, b: usize) -> usize {
+        t * self.batch + b
+    }
+
     /// Number of trained (mask 1) steps in the batch.
     pub fn trained_steps(&self) -> usize {
         self.mask.iter().filter(|&&m| m > 0.0).count()
@@ -243,7 +249,7 @@ impl ReplayBuffer {
                 let Some(i) = self.offset(start, k).filter(|&i| self.episode[i] == ep) else {
                     continue;
                 };
-                let row = b * window + t;
+                let row = t * batch + b;
                 out.obs[row * o..(row + 1) * o].copy_from_slice(&self.obs[i * o..(i + 1) * o]);
                 out.next_obs[row * o..(row + 1) * o]
                     .copy_from_slice(&self.next_obs[i * o..(i + 1) * o]);
@@ -307,7 +313,7 @@ mod tests {
         let batch = buf.sample_sequences(&mut rng, 500, 4, 3);
         for b in 0..batch.batch {
             let real: Vec<(f32, f32)> = (0..batch.window)
-                .map(|t| b * batch.window + t)
+                .map(|t| batch.row(t, b))
                 .filter(|&r| batch.obs[r * 2] != 0.0)
                 .map(|r| (batch.obs[r * 2], batch.obs[r * 2 + 1]))
                 .collect();
@@ -328,16 +334,22 @@ mod tests {
         let batch = buf.sample_sequences(&mut rng, 400, 2, 3);
         let mut seen = false;
         for b in 0..batch.batch {
-            let r0 = b * batch.window;
-            let first_trained = batch.obs[(r0 + 3) * 2 + 1];
+            let col = |v: &[bool]| -> Vec<bool> {
+                (0..batch.window).map(|t| v[batch.row(t, b)]).collect()
+            };
+            let mask: Vec<f32> = (0..batch.window)
+                .map(|t| batch.mask[batch.row(t, b)])
+                .collect();
+            let step = |t: usize| batch.obs[batch.row(t, b) * 2 + 1];
+            let first_trained = step(3);
             if first_trained == 1.0 {
                 seen = true;
-                assert_eq!(&batch.reset[r0..r0 + 5], &[false, false, true, false, false]);
-                assert_eq!(&batch.mask[r0..r0 + 5], &[0.0, 0.0, 0.0, 1.0, 1.0]);
-                assert_eq!(batch.obs[(r0 + 2) * 2 + 1], 0.0, "real burn-in step is step 0");
+                assert_eq!(col(&batch.reset), [false, false, true, false, false]);
+                assert_eq!(mask, [0.0, 0.0, 0.0, 1.0, 1.0]);
+                assert_eq!(step(2), 0.0, "real burn-in step is step 0");
             }
             // Exactly one reset per window, at the first real step.
-            let resets = batch.reset[r0..r0 + batch.window].iter().filter(|&&r| r).count();
+            let resets = col(&batch.reset).iter().filter(|&&r| r).count();
             assert_eq!(resets, 1);
         }
         assert!(seen, "a window starting at step 1 should have been drawn");
@@ -349,10 +361,12 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         let batch = buf.sample_sequences(&mut rng, 50, 4, 0);
         for b in 0..batch.batch {
-            let r0 = b * batch.window;
-            let start = batch.obs[r0 * 2 + 1] as usize;
-            let expect: Vec<f32> = (0..4).map(|t| if start + t < 2 { 1.0 } else { 0.0 }).collect();
-            assert_eq!(&batch.mask[r0..r0 + 4], expect.as_slice());
+            let start = batch.obs[batch.row(0, b) * 2 + 1] as usize;
+            let mask: Vec<f32> = (0..4).map(|t| batch.mask[batch.row(t, b)]).collect();
+            let expect: Vec<f32> = (0..4)
+                .map(|t| if start + t < 2 { 1.0 } else { 0.0 })
+                .collect();
+            assert_eq!(mask, expect);
         }
         // Terminal flag of the last step survives.
         assert!(batch.terminated.contains(&1.0));
@@ -365,13 +379,15 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let batch = buf.sample_sequences(&mut rng, 300, 3, 2);
         for b in 0..batch.batch {
-            let r0 = b * batch.window;
             let eps: Vec<f32> = (0..batch.window)
-                .filter(|t| batch.mask[r0 + t] > 0.0)
-                .map(|t| batch.obs[(r0 + t) * 2])
+                .filter(|&t| batch.mask[batch.row(t, b)] > 0.0)
+                .map(|t| batch.obs[batch.row(t, b) * 2])
                 .collect();
             assert!(eps.windows(2).all(|w| w[0] == w[1]));
-            assert!(eps.iter().all(|&e| e >= 2.0), "the first episode was partly overwritten");
+            assert!(
+                eps.iter().all(|&e| e >= 2.0),
+                "the first episode was partly overwritten"
+            );
         }
     }
 
