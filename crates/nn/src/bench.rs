@@ -1,0 +1,356 @@
+//! Speed of the networks, for `esrl bench nn` and for comparison with PyTorch
+//! (`crates/nn/scripts/torch_nn_bench.py` times the same shapes; `peers/torch_sac_step.py`
+//! the same full SAC update).
+//!
+//! Everything runs on the calling thread (faer `Par::Seq`). Each figure is the median over
+//! `reps` repetitions after `warmup` untimed runs.
+
+use crate::error::NnError;
+use crate::graph::Graph;
+use crate::nets::{Actor, ActorConfig, Critic, CriticConfig, Module};
+use crate::optim::{Adam, AdamConfig};
+use crate::tensor::Tensor;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// What to measure.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct BenchConfig {
+    /// Observation width. Default 43 (the walking env).
+    pub obs_dim: usize,
+    /// Action width. Default 6.
+    pub act_dim: usize,
+    /// Sequences per batch (and transitions per MLP batch). Default 256 (SPEC §4).
+    pub batch: usize,
+    /// Steps per sequence. Default 8 (as `peers/torch_sac_step.py`).
+    pub seq_len: usize,
+    /// Timed repetitions; the median is reported. Default 7.
+    pub reps: usize,
+    /// Untimed warm-up runs. Default 2.
+    pub warmup: usize,
+    /// Also time a whole SAC update (target, twin-critic loss, actor loss through frozen
+    /// critics, α, Polyak), as `peers/torch_sac_step.py` does. Default true.
+    pub sac_update: bool,
+}
+
+impl Default for BenchConfig {
+    fn default() -> Self {
+        Self {
+            obs_dim: 43,
+            act_dim: 6,
+            batch: 256,
+            seq_len: 8,
+            reps: 7,
+            warmup: 2,
+            sac_update: true,
+        }
+    }
+}
+
+/// Results in milliseconds (medians) and parameter counts.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BenchReport {
+    /// The configuration measured.
+    pub config: BenchConfig,
+    /// Parameters of the paper-size recurrent actor.
+    pub actor_params: usize,
+    /// Parameters of one paper-size recurrent critic.
+    pub critic_params: usize,
+    /// Forward + backward of the recurrent actor on batch × seq_len (sample, log-prob, loss).
+    pub actor_ms: f64,
+    /// Forward + backward of one recurrent critic on batch × seq_len (MSE loss).
+    pub critic_ms: f64,
+    /// Parameters of the feed-forward (MLP 256×256) actor.
+    pub mlp_actor_params: usize,
+    /// Parameters of one feed-forward critic.
+    pub mlp_critic_params: usize,
+    /// Forward + backward of the MLP actor on `batch` transitions.
+    pub mlp_actor_ms: f64,
+    /// Forward + backward of one MLP critic on `batch` transitions.
+    pub mlp_critic_ms: f64,
+    /// One full SAC update with the recurrent networks (if measured).
+    pub sac_update_ms: Option<f64>,
+    /// One full SAC update with the MLP networks (if measured).
+    pub mlp_sac_update_ms: Option<f64>,
+    /// Threads used (always 1).
+    pub threads: usize,
+}
+
+fn randn(rows: usize, cols: usize, rng: &mut ChaCha8Rng) -> Tensor {
+    Tensor::from_vec(
+        rows,
+        cols,
+        (0..rows * cols)
+            .map(|_| rng.sample::<f32, _>(rand_distr::StandardNormal))
+            .collect(),
+    )
+}
+
+fn median_ms(reps: usize, warmup: usize, mut f: impl FnMut()) -> f64 {
+    for _ in 0..warmup {
+        f();
+    }
+    let mut v: Vec<f64> = (0..reps.max(1))
+        .map(|_| {
+            let t0 = Instant::now();
+            f();
+            t0.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+/// Forward + backward of an actor on (rows, obs) with a SAC-like loss mean(log π − Σa).
+fn actor_fwd_bwd(actor: &Actor, obs: &Tensor, batch: usize, rng: &mut ChaCha8Rng) -> f32 {
+    let mut g = Graph::new();
+    let o = g.constant(obs.clone());
+    let out = actor.forward(&mut g, o, batch, None);
+    let s = actor.sample(&mut g, &out, rng);
+    let asum = g.sum_cols(s.action);
+    let d = g.sub(s.log_prob, asum);
+    let loss = g.mean(d);
+    let grads = g.backward(loss);
+    grads.of(actor.params()).map_or(0.0, |v| v[0])
+}
+
+/// Forward + backward of a critic with an MSE loss.
+fn critic_fwd_bwd(critic: &Critic, obs: &Tensor, act: &Tensor, y: &Tensor, batch: usize) -> f32 {
+    let mut g = Graph::new();
+    let (o, a, yv) = (
+        g.constant(obs.clone()),
+        g.constant(act.clone()),
+        g.constant(y.clone()),
+    );
+    let q = critic.forward(&mut g, o, a, batch, None).q;
+    let loss = g.mse(q, yv);
+    let grads = g.backward(loss);
+    grads.of(critic.params()).map_or(0.0, |v| v[0])
+}
+
+/// The state of a SAC learner, enough to time an update like `peers/torch_sac_step.py`.
+struct Sac {
+    actor: Actor,
+    q1: Critic,
+    q2: Critic,
+    q1_t: Critic,
+    q2_t: Critic,
+    opt_pi: Adam,
+    opt_q1: Adam,
+    opt_q2: Adam,
+    log_alpha: f32,
+    alpha_m: f32,
+    alpha_v: f32,
+    alpha_t: i32,
+    rng: ChaCha8Rng,
+}
+
+struct Batch {
+    obs: Tensor,
+    act: Tensor,
+    rew: Tensor,
+    next_obs: Tensor,
+    not_done: Tensor,
+    b: usize,
+}
+
+impl Sac {
+    fn new(
+        obs_dim: usize,
+        act_dim: usize,
+        acfg: &ActorConfig,
+        ccfg: &CriticConfig,
+    ) -> Result<Self, NnError> {
+        let actor = Actor::new(obs_dim, act_dim, acfg, 1)?;
+        let q1 = Critic::new(obs_dim, act_dim, ccfg, 2)?;
+        let q2 = Critic::new(obs_dim, act_dim, ccfg, 3)?;
+        let cfg = AdamConfig {
+            lr: 3e-4,
+            l2: 0.0,
+            ..AdamConfig::default()
+        };
+        Ok(Self {
+            opt_pi: Adam::new(cfg.clone(), actor.params())?,
+            opt_q1: Adam::new(cfg.clone(), q1.params())?,
+            opt_q2: Adam::new(cfg, q2.params())?,
+            q1_t: q1.clone(),
+            q2_t: q2.clone(),
+            actor,
+            q1,
+            q2,
+            log_alpha: 0.0,
+            alpha_m: 0.0,
+            alpha_v: 0.0,
+            alpha_t: 0,
+            rng: ChaCha8Rng::seed_from_u64(7),
+        })
+    }
+
+    fn update(&mut self, bt: &Batch) -> Result<(), NnError> {
+        let (gamma, tau, b) = (0.99f32, 0.005f32, bt.b);
+        let alpha = self.log_alpha.exp();
+        let y = {
+            let mut g = Graph::no_grad();
+            let o2 = g.constant(bt.next_obs.clone());
+            let out = self.actor.forward(&mut g, o2, b, None);
+            let s = self.actor.sample(&mut g, &out, &mut self.rng);
+            let qa = self.q1_t.forward(&mut g, o2, s.action, b, None).q;
+            let qb = self.q2_t.forward(&mut g, o2, s.action, b, None).q;
+            let qmin = g.minimum(qa, qb);
+            let lp = g.scale(s.log_prob, alpha);
+            let soft = g.sub(qmin, lp);
+            let nd = g.constant(bt.not_done.clone());
+            let disc = g.mul(soft, nd);
+            let disc = g.scale(disc, gamma);
+            let r = g.constant(bt.rew.clone());
+            let y = g.add(r, disc);
+            g.take_value(y)
+        };
+        let mut grads = {
+            let mut g = Graph::new();
+            let (o, a, yv) = (
+                g.constant(bt.obs.clone()),
+                g.constant(bt.act.clone()),
+                g.constant(y),
+            );
+            let qa = self.q1.forward(&mut g, o, a, b, None).q;
+            let qb = self.q2.forward(&mut g, o, a, b, None).q;
+            let la = g.mse(qa, yv);
+            let lb = g.mse(qb, yv);
+            let loss = g.add(la, lb);
+            g.backward(loss)
+        };
+        self.opt_q1.apply(self.q1.params_mut(), &mut grads)?;
+        self.opt_q2.apply(self.q2.params_mut(), &mut grads)?;
+        let (mut grads, lp_mean) = {
+            let mut g = Graph::new();
+            g.freeze(self.q1.params());
+            g.freeze(self.q2.params());
+            let o = g.constant(bt.obs.clone());
+            let out = self.actor.forward(&mut g, o, b, None);
+            let s = self.actor.sample(&mut g, &out, &mut self.rng);
+            let qa = self.q1.forward(&mut g, o, s.action, b, None).q;
+            let qb = self.q2.forward(&mut g, o, s.action, b, None).q;
+            let qmin = g.minimum(qa, qb);
+            let lp = g.scale(s.log_prob, alpha);
+            let d = g.sub(lp, qmin);
+            let loss = g.mean(d);
+            let lp_mean = g.value(s.log_prob).mean();
+            (g.backward(loss), lp_mean)
+        };
+        self.opt_pi.apply(self.actor.params_mut(), &mut grads)?;
+        // α: L = −log α · (mean log π + H̄); one scalar Adam step.
+        let grad = -(lp_mean - self.actor.act_dim() as f32);
+        self.alpha_t += 1;
+        self.alpha_m = 0.9 * self.alpha_m + 0.1 * grad;
+        self.alpha_v = 0.999 * self.alpha_v + 0.001 * grad * grad;
+        let mh = self.alpha_m / (1.0 - 0.9f32.powi(self.alpha_t));
+        let vh = self.alpha_v / (1.0 - 0.999f32.powi(self.alpha_t));
+        self.log_alpha -= 3e-4 * mh / (vh.sqrt() + 1e-8);
+        self.q1_t
+            .params_mut()
+            .polyak_update(self.q1.params(), tau)?;
+        self.q2_t
+            .params_mut()
+            .polyak_update(self.q2.params(), tau)?;
+        Ok(())
+    }
+}
+
+fn batch(rows: usize, b: usize, obs_dim: usize, act_dim: usize, rng: &mut ChaCha8Rng) -> Batch {
+    Batch {
+        obs: randn(rows, obs_dim, rng),
+        act: Tensor::from_vec(
+            rows,
+            act_dim,
+            (0..rows * act_dim)
+                .map(|_| rng.random_range(-1.0f32..1.0))
+                .collect(),
+        ),
+        rew: randn(rows, 1, rng),
+        next_obs: randn(rows, obs_dim, rng),
+        not_done: Tensor::from_vec(
+            rows,
+            1,
+            (0..rows)
+                .map(|_| if rng.random::<f32>() < 0.02 { 0.0 } else { 1.0 })
+                .collect(),
+        ),
+        b,
+    }
+}
+
+/// Runs the benchmark on the calling thread.
+pub fn run(config: &BenchConfig) -> Result<BenchReport, NnError> {
+    if config.batch == 0 || config.seq_len == 0 {
+        return Err(NnError::Config {
+            field: "bench.batch/seq_len".into(),
+            value: format!("{}/{}", config.batch, config.seq_len),
+            reason: "must be ≥ 1".into(),
+        });
+    }
+    let (od, ad, b, t) = (config.obs_dim, config.act_dim, config.batch, config.seq_len);
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let actor = Actor::new(od, ad, &ActorConfig::paper(), 1)?;
+    let critic = Critic::new(od, ad, &CriticConfig::paper(), 2)?;
+    let mlp_actor = Actor::new(od, ad, &ActorConfig::feed_forward(), 3)?;
+    let mlp_critic = Critic::new(od, ad, &CriticConfig::feed_forward(), 4)?;
+    let seq = batch(b * t, b, od, ad, &mut rng);
+    let flat = batch(b, b, od, ad, &mut rng);
+    let mut sink = 0.0f32;
+    let (reps, warm) = (config.reps, config.warmup);
+    let actor_ms = median_ms(reps, warm, || {
+        sink += actor_fwd_bwd(&actor, &seq.obs, b, &mut rng)
+    });
+    let critic_ms = median_ms(reps, warm, || {
+        sink += critic_fwd_bwd(&critic, &seq.obs, &seq.act, &seq.rew, b)
+    });
+    let mlp_actor_ms = median_ms(reps * 5, warm * 5, || {
+        sink += actor_fwd_bwd(&mlp_actor, &flat.obs, b, &mut rng)
+    });
+    let mlp_critic_ms = median_ms(reps * 5, warm * 5, || {
+        sink += critic_fwd_bwd(&mlp_critic, &flat.obs, &flat.act, &flat.rew, b)
+    });
+    let (mut sac_update_ms, mut mlp_sac_update_ms) = (None, None);
+    if config.sac_update {
+        let mut sac = Sac::new(od, ad, &ActorConfig::paper(), &CriticConfig::paper())?;
+        let mut err = Ok(());
+        sac_update_ms = Some(median_ms(reps, warm, || {
+            if let Err(e) = sac.update(&seq) {
+                err = Err(e);
+            }
+        }));
+        err?;
+        let mut sac = Sac::new(
+            od,
+            ad,
+            &ActorConfig::feed_forward(),
+            &CriticConfig::feed_forward(),
+        )?;
+        let mut err = Ok(());
+        mlp_sac_update_ms = Some(median_ms(reps * 5, warm * 5, || {
+            if let Err(e) = sac.update(&flat) {
+                err = Err(e);
+            }
+        }));
+        err?;
+    }
+    std::hint::black_box(sink);
+    Ok(BenchReport {
+        config: config.clone(),
+        actor_params: actor.num_params(),
+        critic_params: critic.num_params(),
+        actor_ms,
+        critic_ms,
+        mlp_actor_params: mlp_actor.num_params(),
+        mlp_critic_params: mlp_critic.num_params(),
+        mlp_actor_ms,
+        mlp_critic_ms,
+        sac_update_ms,
+        mlp_sac_update_ms,
+        threads: 1,
+    })
+}

@@ -1,0 +1,404 @@
+//! The tape: a graph of coarse ops recorded during the forward pass and walked backwards.
+//!
+//! Each op is a node holding its output value and whatever its backward needs. Ops are coarse
+//! (a whole `Linear`, a whole LSTM sequence, the Gaussian-tanh sample) so the tape stays short
+//! and almost all time goes into matrix products. The forward of each op and its backward live
+//! side by side in `crate::ops::*`; this file only records nodes and dispatches.
+//!
+//! Parameters are never copied into the graph: an op that uses a network's weights borrows
+//! the network's [`Params`] for the graph's lifetime `'a` and refers to them by a *binding*
+//! index. [`Graph::backward`] returns the parameter gradients in a [`Gradients`] value keyed by
+//! the parameter set, so the graph (and its borrows) can be dropped before the optimiser
+//! mutates the weights.
+
+use crate::ops::lstm::LstmNode;
+use crate::ops::Act;
+use crate::params::Params;
+use crate::tensor::Tensor;
+
+/// Handle to a value recorded in a [`Graph`]. Cheap to copy; only valid for its graph.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Var(pub(crate) usize);
+
+/// Elementwise unary functions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Unary {
+    Relu,
+    Tanh,
+    Sigmoid,
+    Softplus,
+    Exp,
+    Log,
+    Neg,
+    Square,
+}
+
+/// Elementwise binary functions (with (1, 1) broadcasting on either side).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Binary {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Min,
+    Max,
+}
+
+/// A recorded op with the inputs and caches its backward needs.
+pub(crate) enum Op {
+    /// A constant or a gradient leaf; nothing to propagate.
+    Leaf,
+    /// A whole parameter tensor exposed as a value.
+    Param {
+        set: usize,
+        offset: usize,
+    },
+    /// `y = act(x·Wᵀ + b)`.
+    Linear {
+        x: Var,
+        set: usize,
+        w: usize,
+        b: usize,
+        act: Act,
+    },
+    /// A whole LSTM sequence.
+    Lstm(Box<LstmNode>),
+    Unary {
+        x: Var,
+        f: Unary,
+    },
+    Binary {
+        a: Var,
+        b: Var,
+        f: Binary,
+    },
+    Scale {
+        x: Var,
+        s: f32,
+    },
+    AddScalar {
+        x: Var,
+    },
+    ConcatCols {
+        a: Var,
+        b: Var,
+    },
+    SliceCols {
+        x: Var,
+        start: usize,
+    },
+    Sum {
+        x: Var,
+    },
+    Mean {
+        x: Var,
+    },
+    SumCols {
+        x: Var,
+    },
+    MeanCols {
+        x: Var,
+    },
+    Mse {
+        a: Var,
+        b: Var,
+    },
+    /// Tanh-squashed Gaussian sample with its log-probability; output `[a | log π]`.
+    GaussianTanh {
+        mean: Var,
+        std: Var,
+        eps: Tensor,
+    },
+}
+
+pub(crate) struct Node {
+    pub(crate) value: Tensor,
+    pub(crate) op: Op,
+    pub(crate) requires_grad: bool,
+}
+
+/// A parameter set used by the graph.
+pub(crate) struct Binding<'a> {
+    pub(crate) params: &'a Params,
+    pub(crate) trainable: bool,
+}
+
+/// The tape. `'a` is the lifetime of the networks whose parameters it reads.
+///
+/// ```
+/// use esrl_nn::{Graph, Tensor};
+/// let mut g = Graph::new();
+/// let x = g.leaf(Tensor::from_vec(1, 2, vec![0.5, -1.0]));
+/// let y = g.tanh(x);
+/// let loss = g.sum(y);
+/// let grads = g.backward(loss);
+/// let dx = grads.var(x).unwrap();
+/// assert!((dx.get(0, 0) - (1.0 - 0.5f32.tanh().powi(2))).abs() < 1e-6);
+/// ```
+pub struct Graph<'a> {
+    pub(crate) nodes: Vec<Node>,
+    pub(crate) bindings: Vec<Binding<'a>>,
+    frozen: Vec<u64>,
+    grad_enabled: bool,
+}
+
+impl Default for Graph<'_> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<'a> Graph<'a> {
+    /// A graph that records what backward needs.
+    pub fn new() -> Self {
+        Self {
+            nodes: Vec::with_capacity(64),
+            bindings: Vec::new(),
+            frozen: Vec::new(),
+            grad_enabled: true,
+        }
+    }
+
+    /// A graph for inference only (`torch.no_grad()`): no op keeps caches and nothing requires
+    /// a gradient, so [`Graph::backward`] returns empty gradients.
+    pub fn no_grad() -> Self {
+        Self {
+            grad_enabled: false,
+            ..Self::new()
+        }
+    }
+
+    /// Whether this graph records for backward.
+    pub fn grad_enabled(&self) -> bool {
+        self.grad_enabled
+    }
+
+    /// Freezes a parameter set in this graph (`requires_grad = False` in PyTorch): ops using
+    /// it still propagate gradients to their inputs, but no gradient is computed for these
+    /// parameters. Call before the forward pass that uses them.
+    pub fn freeze(&mut self, params: &Params) {
+        debug_assert!(
+            !self.bindings.iter().any(|b| b.params.id() == params.id()),
+            "Graph::freeze called after the parameters were used"
+        );
+        self.frozen.push(params.id());
+    }
+
+    /// Registers `params` (once per set) and returns its binding index and whether the graph
+    /// computes gradients for it.
+    pub(crate) fn bind(&mut self, params: &'a Params) -> (usize, bool) {
+        if let Some(i) = self
+            .bindings
+            .iter()
+            .position(|b| b.params.id() == params.id())
+        {
+            return (i, self.bindings[i].trainable);
+        }
+        let trainable = self.grad_enabled && !self.frozen.contains(&params.id());
+        self.bindings.push(Binding { params, trainable });
+        (self.bindings.len() - 1, trainable)
+    }
+
+    /// The values of a bound parameter set.
+    #[inline]
+    pub(crate) fn pvals(&self, set: usize) -> &'a [f32] {
+        self.bindings[set].params.as_slice()
+    }
+
+    pub(crate) fn push(&mut self, value: Tensor, op: Op, requires_grad: bool) -> Var {
+        self.nodes.push(Node {
+            value,
+            op,
+            requires_grad: requires_grad && self.grad_enabled,
+        });
+        Var(self.nodes.len() - 1)
+    }
+
+    /// Whether `v` needs a gradient.
+    #[inline]
+    pub(crate) fn rg(&self, v: Var) -> bool {
+        self.nodes[v.0].requires_grad
+    }
+
+    /// A constant input (no gradient).
+    pub fn constant(&mut self, t: Tensor) -> Var {
+        self.push(t, Op::Leaf, false)
+    }
+
+    /// An input whose gradient [`Graph::backward`] reports (via [`Gradients::var`]).
+    pub fn leaf(&mut self, t: Tensor) -> Var {
+        self.push(t, Op::Leaf, true)
+    }
+
+    /// The value of `v`.
+    pub fn value(&self, v: Var) -> &Tensor {
+        &self.nodes[v.0].value
+    }
+
+    /// Moves the value of `v` out of the graph (leaving an empty tensor), e.g. to keep a
+    /// no-grad result after the graph is dropped without copying.
+    pub fn take_value(&mut self, v: Var) -> Tensor {
+        std::mem::take(&mut self.nodes[v.0].value)
+    }
+
+    /// `(rows, cols)` of `v`.
+    pub fn shape(&self, v: Var) -> (usize, usize) {
+        self.nodes[v.0].value.shape()
+    }
+
+    /// Exposes the parameter tensor `name` of `params` as a value, e.g. a learnable
+    /// `log α`. A 1-D tensor of length n becomes `(1, n)`; an (r, c) tensor stays (r, c).
+    ///
+    /// # Panics
+    /// If `params` has no tensor called `name` (a programming error).
+    pub fn param(&mut self, params: &'a Params, name: &str) -> Var {
+        let spec = params
+            .specs()
+            .iter()
+            .find(|s| s.name == name)
+            .unwrap_or_else(|| panic!("Graph::param: no tensor `{name}`"));
+        let (rows, cols) = match spec.shape.as_slice() {
+            [n] => (1, *n),
+            [r, c] => (*r, *c),
+            s => (1, s.iter().product()),
+        };
+        let offset = spec.offset;
+        let (set, trainable) = self.bind(params);
+        let value =
+            Tensor::from_slice(rows, cols, &params.as_slice()[offset..offset + rows * cols]);
+        self.push(value, Op::Param { set, offset }, trainable)
+    }
+
+    /// Reverse pass from a `(1, 1)` loss: d loss / d loss = 1.
+    ///
+    /// # Panics
+    /// If `loss` is not `(1, 1)`.
+    pub fn backward(&mut self, loss: Var) -> Gradients {
+        assert_eq!(
+            self.shape(loss),
+            (1, 1),
+            "Graph::backward needs a (1, 1) loss"
+        );
+        self.backward_with(loss, Tensor::scalar(1.0))
+    }
+
+    /// Reverse pass seeded with `seed` = d loss / d `out` (same shape as `out`).
+    pub fn backward_with(&mut self, out: Var, seed: Tensor) -> Gradients {
+        assert_eq!(
+            self.shape(out),
+            seed.shape(),
+            "Graph::backward_with: seed shape"
+        );
+        let mut pgrads: Vec<Option<Vec<f32>>> = self
+            .bindings
+            .iter()
+            .map(|b| b.trainable.then(|| vec![0.0; b.params.len()]))
+            .collect();
+        let mut grads: Vec<Option<Tensor>> = (0..self.nodes.len()).map(|_| None).collect();
+        if self.nodes[out.0].requires_grad {
+            grads[out.0] = Some(seed);
+        }
+        for i in (0..=out.0).rev() {
+            let Some(dy) = grads[i].take() else { continue };
+            let node = &self.nodes[i];
+            if !node.requires_grad {
+                continue;
+            }
+            if let Op::Leaf = node.op {
+                grads[i] = Some(dy);
+                continue;
+            }
+            let mut ctx = BackCtx {
+                nodes: &self.nodes,
+                grads: &mut grads,
+                pgrads: &mut pgrads,
+                bindings: &self.bindings,
+            };
+            crate::ops::backward(&node.op, &node.value, &dy, &mut ctx);
+        }
+        let params = self
+            .bindings
+            .iter()
+            .zip(pgrads)
+            .filter_map(|(b, g)| g.map(|g| (b.params.id(), g)))
+            .collect();
+        Gradients {
+            params,
+            vars: grads,
+        }
+    }
+}
+
+/// What an op's backward may read and write.
+pub(crate) struct BackCtx<'g, 'a> {
+    pub(crate) nodes: &'g [Node],
+    pub(crate) grads: &'g mut [Option<Tensor>],
+    pub(crate) pgrads: &'g mut [Option<Vec<f32>>],
+    pub(crate) bindings: &'g [Binding<'a>],
+}
+
+impl<'g, 'a> BackCtx<'g, 'a> {
+    /// The forward value of `v` (borrowed from the tape, not from `self`).
+    #[inline]
+    pub(crate) fn val(&self, v: Var) -> &'g Tensor {
+        &self.nodes[v.0].value
+    }
+
+    /// Whether `v` needs a gradient.
+    #[inline]
+    pub(crate) fn rg(&self, v: Var) -> bool {
+        self.nodes[v.0].requires_grad
+    }
+
+    /// The gradient accumulator of `v` (zero-initialised on first use), or `None` when `v`
+    /// needs no gradient.
+    #[inline]
+    pub(crate) fn grad(&mut self, v: Var) -> Option<&mut Tensor> {
+        if !self.nodes[v.0].requires_grad {
+            return None;
+        }
+        let (r, c) = self.nodes[v.0].value.shape();
+        Some(self.grads[v.0].get_or_insert_with(|| Tensor::zeros(r, c)))
+    }
+
+    /// Parameter values and gradient accumulator of a binding (`None` when frozen).
+    #[inline]
+    pub(crate) fn pgrad(&mut self, set: usize) -> Option<&mut [f32]> {
+        self.pgrads[set].as_deref_mut()
+    }
+
+    /// Parameter values of a binding.
+    #[inline]
+    pub(crate) fn pvals(&self, set: usize) -> &'a [f32] {
+        self.bindings[set].params.as_slice()
+    }
+}
+
+/// Gradients produced by [`Graph::backward`]: per parameter set, and per leaf value.
+#[derive(Debug, Default)]
+pub struct Gradients {
+    params: Vec<(u64, Vec<f32>)>,
+    vars: Vec<Option<Tensor>>,
+}
+
+impl Gradients {
+    /// Gradient with respect to `params` in its flat layout, or `None` when the set was not
+    /// used, was frozen, or the graph was no-grad.
+    pub fn of(&self, params: &Params) -> Option<&[f32]> {
+        self.params
+            .iter()
+            .find(|(id, _)| *id == params.id())
+            .map(|(_, g)| g.as_slice())
+    }
+
+    /// Like [`Gradients::of`] but moves the buffer out.
+    pub fn take(&mut self, params: &Params) -> Option<Vec<f32>> {
+        let i = self.params.iter().position(|(id, _)| *id == params.id())?;
+        Some(self.params.swap_remove(i).1)
+    }
+
+    /// Gradient with respect to a [`Graph::leaf`] (or `None` if no path reached it).
+    pub fn var(&self, v: Var) -> Option<&Tensor> {
+        self.vars.get(v.0).and_then(|g| g.as_ref())
+    }
+}

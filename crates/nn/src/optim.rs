@@ -1,0 +1,231 @@
+//! Adam with global gradient-norm clipping and L2 regularisation.
+//!
+//! Per step, for gradient g of the loss and parameters θ (t counts steps from 1):
+//!
+//! ```text
+//! g ← g · min(1, clip / ‖g‖₂)            global norm over the whole set (if clip is set)
+//! g ← g + λ·θ                            L2, on weights only (biases excluded, as MATLAB)
+//! m ← β₁m + (1 − β₁)g     v ← β₂v + (1 − β₂)g²
+//! θ ← θ − lr · (m / (1 − β₁ᵗ)) / (√(v / (1 − β₂ᵗ)) + ε)
+//! ```
+//!
+//! Clipping comes before L2 (as `clip_grad_norm_` followed by `Adam(weight_decay=λ)` in
+//! PyTorch), so the regulariser is never clipped away.
+
+use crate::error::NnError;
+use crate::params::Params;
+use serde::{Deserialize, Serialize};
+
+/// Adam hyperparameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AdamConfig {
+    /// Learning rate. Default 1e-3 (Kingma & Ba); agents set their own.
+    pub lr: f32,
+    /// First-moment decay β₁. Default 0.9 (MATLAB `GradientDecayFactor`).
+    pub beta1: f32,
+    /// Second-moment decay β₂. Default 0.999 (MATLAB `SquaredGradientDecayFactor`).
+    pub beta2: f32,
+    /// ε in the denominator. Default 1e-8 (MATLAB `Epsilon`).
+    pub eps: f32,
+    /// L2 factor λ on weights. Default 1e-4 (MATLAB `L2RegularizationFactor`).
+    pub l2: f32,
+    /// Global L2-norm gradient threshold; `None` = no clipping. Default `None` (MATLAB
+    /// `GradientThreshold = Inf`).
+    pub grad_clip: Option<f32>,
+}
+
+impl Default for AdamConfig {
+    fn default() -> Self {
+        Self {
+            lr: 1e-3,
+            beta1: 0.9,
+            beta2: 0.999,
+            eps: 1e-8,
+            l2: 1e-4,
+            grad_clip: None,
+        }
+    }
+}
+
+impl AdamConfig {
+    /// Checks every field; errors name the field.
+    pub fn validate(&self) -> Result<(), NnError> {
+        let bad = |field: &str, v: f32, reason: &str| {
+            Err(NnError::Config {
+                field: format!("adam.{field}"),
+                value: v.to_string(),
+                reason: reason.into(),
+            })
+        };
+        if !(self.lr.is_finite() && self.lr > 0.0) {
+            return bad("lr", self.lr, "must be finite and > 0");
+        }
+        if !(0.0..1.0).contains(&self.beta1) {
+            return bad("beta1", self.beta1, "must be in [0, 1)");
+        }
+        if !(0.0..1.0).contains(&self.beta2) {
+            return bad("beta2", self.beta2, "must be in [0, 1)");
+        }
+        if !(self.eps.is_finite() && self.eps > 0.0) {
+            return bad("eps", self.eps, "must be finite and > 0");
+        }
+        if !(self.l2.is_finite() && self.l2 >= 0.0) {
+            return bad("l2", self.l2, "must be finite and ≥ 0");
+        }
+        if let Some(c) = self.grad_clip {
+            if c.is_nan() || c <= 0.0 {
+                return bad("grad_clip", c, "must be > 0 (or absent for no clipping)");
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Adam's moment estimates, exportable for checkpoints.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct AdamState {
+    /// Steps taken.
+    pub t: u64,
+    /// First moments (flat, parameter layout).
+    pub m: Vec<f32>,
+    /// Second moments.
+    pub v: Vec<f32>,
+}
+
+/// Adam over one [`Params`] set.
+#[derive(Clone, Debug)]
+pub struct Adam {
+    config: AdamConfig,
+    decay: Vec<bool>,
+    state: AdamState,
+}
+
+/// Scales `grads` (several buffers seen as one vector) so that their global L2 norm is at most
+/// `max_norm`; returns the norm before scaling. Non-finite norms are returned unscaled.
+pub fn clip_grad_norm(grads: &mut [&mut [f32]], max_norm: f32) -> f32 {
+    let norm = grads
+        .iter()
+        .flat_map(|g| g.iter())
+        .map(|&x| (x as f64) * (x as f64))
+        .sum::<f64>()
+        .sqrt() as f32;
+    if norm.is_finite() && norm > max_norm {
+        let k = max_norm / norm;
+        grads
+            .iter_mut()
+            .for_each(|g| g.iter_mut().for_each(|x| *x *= k));
+    }
+    norm
+}
+
+impl Adam {
+    /// An optimiser for `params` (only its layout is read).
+    pub fn new(config: AdamConfig, params: &Params) -> Result<Self, NnError> {
+        config.validate()?;
+        let mut decay = vec![false; params.len()];
+        for s in params.specs() {
+            decay[s.range()].fill(s.decay);
+        }
+        let n = params.len();
+        Ok(Self {
+            config,
+            decay,
+            state: AdamState {
+                t: 0,
+                m: vec![0.0; n],
+                v: vec![0.0; n],
+            },
+        })
+    }
+
+    /// The hyperparameters.
+    pub fn config(&self) -> &AdamConfig {
+        &self.config
+    }
+
+    /// Changes the learning rate (schedules).
+    pub fn set_lr(&mut self, lr: f32) {
+        self.config.lr = lr;
+    }
+
+    /// The moments, for checkpoints.
+    pub fn state(&self) -> &AdamState {
+        &self.state
+    }
+
+    /// Restores moments saved by [`Adam::state`].
+    pub fn set_state(&mut self, state: AdamState) -> Result<(), NnError> {
+        for (what, v) in [("Adam m", &state.m), ("Adam v", &state.v)] {
+            if v.len() != self.decay.len() {
+                return Err(NnError::LengthMismatch {
+                    what: what.into(),
+                    expected: self.decay.len(),
+                    found: v.len(),
+                });
+            }
+        }
+        self.state = state;
+        Ok(())
+    }
+
+    /// One step on `params` with its gradient taken out of `grads` (the usual call after
+    /// [`crate::Graph::backward`]). Returns the gradient norm before clipping.
+    pub fn apply(
+        &mut self,
+        params: &mut Params,
+        grads: &mut crate::Gradients,
+    ) -> Result<f32, NnError> {
+        let mut g = grads
+            .take(params)
+            .ok_or(NnError::NoGradient { len: params.len() })?;
+        self.step(params, &mut g)
+    }
+
+    /// One step on `params` with the loss gradient `grad` (consumed: clipped in place).
+    /// Returns the gradient norm before clipping. A non-finite gradient is refused with
+    /// [`NnError::NonFiniteGradient`] and nothing changes.
+    pub fn step(&mut self, params: &mut Params, grad: &mut [f32]) -> Result<f32, NnError> {
+        let n = self.decay.len();
+        if params.len() != n || grad.len() != n {
+            return Err(NnError::LengthMismatch {
+                what: "Adam::step gradient/parameters".into(),
+                expected: n,
+                found: grad.len().min(params.len()),
+            });
+        }
+        let norm = match self.config.grad_clip {
+            Some(c) => clip_grad_norm(&mut [grad], c),
+            None => grad
+                .iter()
+                .map(|&x| (x as f64) * (x as f64))
+                .sum::<f64>()
+                .sqrt() as f32,
+        };
+        if !norm.is_finite() {
+            return Err(NnError::NonFiniteGradient {
+                what: format!("{n} parameters"),
+            });
+        }
+        let c = &self.config;
+        self.state.t += 1;
+        let t = self.state.t as i32;
+        let bc1 = 1.0 - (c.beta1 as f64).powi(t);
+        let bc2 = 1.0 - (c.beta2 as f64).powi(t);
+        let step = (c.lr as f64 / bc1) as f32;
+        let inv_sqrt_bc2 = (1.0 / bc2.sqrt()) as f32;
+        let (b1, b2, eps, l2) = (c.beta1, c.beta2, c.eps, c.l2);
+        let theta = params.as_mut_slice();
+        crate::kern::simd(|| {
+            for i in 0..n {
+                let g = grad[i] + if self.decay[i] { l2 * theta[i] } else { 0.0 };
+                let m = b1 * self.state.m[i] + (1.0 - b1) * g;
+                let v = b2 * self.state.v[i] + (1.0 - b2) * g * g;
+                self.state.m[i] = m;
+                self.state.v[i] = v;
+                theta[i] -= step * m / (v.sqrt() * inv_sqrt_bc2 + eps);
+            }
+        });
+        Ok(norm)
+    }
+}
