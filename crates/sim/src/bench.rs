@@ -1,0 +1,89 @@
+//! Throughput of the walking environment on one core (`esrl bench env`).
+
+use std::time::Instant;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::env::Env;
+use crate::error::SimError;
+use crate::walk::{WalkConfig, WalkEnv};
+
+/// What [`bench_walk`] measured.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BenchReport {
+    /// Control steps per wall-clock second (resets included).
+    pub steps_per_s: f64,
+    /// Control steps taken.
+    pub steps: usize,
+    /// Wall-clock time of the stepping loop, s (environment construction excluded).
+    pub wall_s: f64,
+    /// Episodes started (the first reset included).
+    pub episodes: usize,
+    /// Episodes that ended in a fall.
+    pub falls: usize,
+    /// Simulated seconds per wall-clock second.
+    pub realtime_factor: f64,
+    /// Control period, s.
+    pub control_period: f32,
+    /// Physics (Rapier) step, s.
+    pub dt: f32,
+    /// Rapier steps per control step.
+    pub substeps: u32,
+    /// Rapier solver iterations (each one an integration substep in Rapier 0.36).
+    pub solver_iterations: u32,
+    /// Seed of the random actions and resets.
+    pub seed: u64,
+    /// Observation length.
+    pub obs_dim: usize,
+    /// Action length.
+    pub act_dim: usize,
+}
+
+/// Runs `steps` control steps of [`WalkEnv`] with uniformly random actions in `[-1, 1]`,
+/// resetting (seed `seed + episode`) whenever an episode ends, on the calling thread.
+pub fn bench_walk(config: &WalkConfig, steps: usize, seed: u64) -> Result<BenchReport, SimError> {
+    let mut env = WalkEnv::new(config.clone())?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let act_dim = env.act_dim();
+    let mut action = vec![0.0f32; act_dim];
+    let start = Instant::now();
+    let mut episodes = 1;
+    let mut falls = 0;
+    env.reset(seed);
+    for _ in 0..steps {
+        for a in action.iter_mut() {
+            *a = rng.random_range(-1.0..=1.0);
+        }
+        let step = env.step(&action);
+        if step.terminated || step.truncated {
+            if step.info.gait.as_ref().is_some_and(|g| g.fell) {
+                falls += 1;
+            }
+            env.reset(seed.wrapping_add(episodes as u64));
+            episodes += 1;
+        }
+    }
+    let wall_s = start.elapsed().as_secs_f64();
+    let steps_per_s = if wall_s > 0.0 {
+        steps as f64 / wall_s
+    } else {
+        0.0
+    };
+    Ok(BenchReport {
+        steps_per_s,
+        steps,
+        wall_s,
+        episodes,
+        falls,
+        realtime_factor: steps_per_s * config.control_period as f64,
+        control_period: config.control_period,
+        dt: config.control_period / config.physics.substeps as f32,
+        substeps: config.physics.substeps,
+        solver_iterations: config.physics.solver_iterations,
+        seed,
+        obs_dim: env.obs_dim(),
+        act_dim,
+    })
+}

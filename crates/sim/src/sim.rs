@@ -1,0 +1,563 @@
+//! A [`RobotModel`] instantiated in a Rapier world: one reduced-coordinate multibody, a flat
+//! ground, torque inputs and state read-out.
+
+use std::sync::Arc;
+
+use rapier3d::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{SimError, UrdfError};
+use crate::math::{self, Iso};
+use crate::model::{JointKind, LinkPose, RobotModel, Shape};
+
+/// Physics settings of a world: the integrator step, the solver and the contact model.
+///
+/// The defaults are the fastest settings that pass the 60 s PD-standing test
+/// (`tests/standing.rs`); see the crate docs for the measurements behind them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct PhysicsConfig {
+    /// Rapier steps per control period; the physics step is `control_period / substeps`.
+    /// Default 1 (fastest stable setting, crate docs "Physics step").
+    pub substeps: u32,
+    /// Rapier `num_solver_iterations`. In Rapier 0.36 each iteration is also an integration
+    /// substep of `dt / solver_iterations`. Default 4 (crate docs "Physics step").
+    pub solver_iterations: u32,
+    /// Gravitational acceleration, m/s², along −z. Default 9.81 (standard gravity).
+    pub gravity: f32,
+    /// Coulomb friction coefficient of robot and ground colliders (Rapier averages the two).
+    /// Default 1.0 (SPEC §2: "flat, friction about 1").
+    pub friction: f32,
+    /// Whether links of the robot collide with each other. Default false: with sagittal
+    /// legs and limited shoulders the segments cannot meet in a meaningful way, and the
+    /// paper's Simscape model only has foot/body–ground contact.
+    pub self_collisions: bool,
+}
+
+impl Default for PhysicsConfig {
+    fn default() -> Self {
+        Self {
+            substeps: 1,
+            solver_iterations: 4,
+            gravity: 9.81,
+            friction: 1.0,
+            self_collisions: false,
+        }
+    }
+}
+
+impl PhysicsConfig {
+    /// Checks the values, naming the field at fault (`prefix` is prepended to field names).
+    pub fn validate(&self, prefix: &str) -> Result<(), SimError> {
+        let bad = |field: &str, value: String, reason: &str| {
+            Err(SimError::Config {
+                field: format!("{prefix}{field}"),
+                value,
+                reason: reason.to_owned(),
+            })
+        };
+        if self.substeps == 0 || self.substeps > 1000 {
+            return bad("substeps", self.substeps.to_string(), "must be in 1..=1000");
+        }
+        if self.solver_iterations == 0 || self.solver_iterations > 1000 {
+            return bad(
+                "solver_iterations",
+                self.solver_iterations.to_string(),
+                "must be in 1..=1000",
+            );
+        }
+        if !(self.gravity.is_finite() && self.gravity >= 0.0) {
+            return bad(
+                "gravity",
+                self.gravity.to_string(),
+                "must be finite and ≥ 0",
+            );
+        }
+        if !(self.friction.is_finite() && self.friction >= 0.0) {
+            return bad(
+                "friction",
+                self.friction.to_string(),
+                "must be finite and ≥ 0",
+            );
+        }
+        Ok(())
+    }
+}
+
+/// How the root link is attached to the world.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Base {
+    /// Free-floating (6 degrees of freedom), e.g. the humanoid's torso.
+    Floating,
+    /// Welded to the world, e.g. a pendulum's pivot.
+    Fixed,
+}
+
+/// Everything needed to build a world around a model.
+#[derive(Clone, Debug)]
+pub struct SimSetup {
+    /// Rapier step, s.
+    pub dt: f32,
+    /// Physics settings (only `solver_iterations`, `gravity`, `friction` and
+    /// `self_collisions` are read here; `substeps` is the caller's business).
+    pub physics: PhysicsConfig,
+    /// Floating or fixed root.
+    pub base: Base,
+    /// Whether to add the flat ground (top surface at z = 0).
+    pub ground: bool,
+}
+
+/// Initial state of a robot: root position (upright), joint positions and velocities, one per
+/// joint in URDF order (entries of fixed joints are ignored).
+#[derive(Clone, Debug, Default)]
+pub struct RobotState {
+    /// Root link origin in the world, m. Orientation is the identity.
+    pub base_position: [f64; 3],
+    /// Joint positions, rad.
+    pub q: Vec<f64>,
+    /// Joint velocities, rad/s.
+    pub qd: Vec<f64>,
+}
+
+const ROBOT_GROUP: Group = Group::GROUP_1;
+const GROUND_GROUP: Group = Group::GROUP_2;
+
+/// One robot in one Rapier world.
+pub struct RobotSim {
+    world: PhysicsWorld,
+    model: Arc<RobotModel>,
+    bodies: Vec<RigidBodyHandle>,
+    colliders: Vec<Vec<ColliderHandle>>,
+    ground: Option<ColliderHandle>,
+    multibody: Option<MultibodyIndex>,
+    /// Per joint: multibody link id of its child.
+    link_ids: Vec<usize>,
+    /// Per joint: unit axis in the parent link frame.
+    axis_in_parent: Vec<Vector>,
+    torques: Vec<f32>,
+    dt: f32,
+    time: f64,
+}
+
+impl RobotSim {
+    /// Builds a world holding `model` in the initial `state`.
+    pub fn new(
+        model: Arc<RobotModel>,
+        setup: &SimSetup,
+        state: &RobotState,
+    ) -> Result<Self, SimError> {
+        setup.physics.validate("physics.")?;
+        if !(setup.dt.is_finite() && setup.dt > 0.0) {
+            return Err(SimError::Config {
+                field: "dt".into(),
+                value: setup.dt.to_string(),
+                reason: "must be finite and > 0".into(),
+            });
+        }
+        let root = model.root();
+        if setup.base == Base::Floating && model.links()[root].mass <= 0.0 {
+            return Err(UrdfError::MasslessFloatingRoot {
+                link: model.links()[root].name.clone(),
+            }
+            .into());
+        }
+        Ok(Self::build(model, setup, state))
+    }
+
+    /// [`Self::new`] without the checks, for setups that already passed them.
+    pub(crate) fn build(model: Arc<RobotModel>, setup: &SimSetup, state: &RobotState) -> Self {
+        let root = model.root();
+        let n_joints = model.joints().len();
+        let mut world = PhysicsWorld::default();
+        world.gravity = Vector::new(0.0, 0.0, -setup.physics.gravity);
+        world.integration_parameters.dt = setup.dt;
+        world.integration_parameters.num_solver_iterations =
+            setup.physics.solver_iterations as usize;
+
+        let friction = setup.physics.friction;
+        let ground = setup.ground.then(|| {
+            let body = world.insert_body(RigidBodyBuilder::fixed());
+            let collider = ColliderBuilder::cuboid(1000.0, 1000.0, 0.5)
+                .translation(Vector::new(0.0, 0.0, -0.5))
+                .friction(friction)
+                .collision_groups(InteractionGroups::new(
+                    GROUND_GROUP,
+                    ROBOT_GROUP,
+                    InteractionTestMode::And,
+                ));
+            world.insert_collider(collider, Some(body))
+        });
+
+        let base = Iso::from_translation(state.base_position);
+        let poses = model.forward_kinematics(&base, &state.q);
+        let robot_filter = if setup.physics.self_collisions {
+            ROBOT_GROUP | GROUND_GROUP
+        } else {
+            GROUND_GROUP
+        };
+        let mut bodies = vec![RigidBodyHandle::invalid(); model.links().len()];
+        let mut colliders = vec![Vec::new(); model.links().len()];
+        let mut link_order = vec![root];
+        link_order.extend(model.joint_order().iter().map(|&j| model.joints()[j].child));
+        for &l in &link_order {
+            let link = &model.links()[l];
+            let mut builder = if l == root && setup.base == Base::Fixed {
+                RigidBodyBuilder::fixed()
+            } else {
+                RigidBodyBuilder::dynamic()
+            }
+            .pose(poses[l].to_pose())
+            .can_sleep(false);
+            if link.mass > 0.0 {
+                let c = link.com;
+                let mut inertia = [[0.0f32; 3]; 3];
+                for (r, row) in inertia.iter_mut().enumerate() {
+                    for (k, v) in row.iter_mut().enumerate() {
+                        *v = link.inertia[r][k] as f32;
+                    }
+                }
+                // glam matrices are column-major; the tensor is symmetric, so either reading works.
+                let m = Matrix::from_cols_array_2d(&inertia);
+                builder = builder.additional_mass_properties(MassProperties::with_inertia_matrix(
+                    Vector::new(c[0] as f32, c[1] as f32, c[2] as f32),
+                    link.mass as f32,
+                    m,
+                ));
+            }
+            let handle = world.insert_body(builder);
+            bodies[l] = handle;
+            for (origin, shape) in &link.shapes {
+                let (builder, extra) = match *shape {
+                    Shape::Box { size } => (
+                        ColliderBuilder::cuboid(size[0] / 2.0, size[1] / 2.0, size[2] / 2.0),
+                        math::IDENTITY,
+                    ),
+                    Shape::Sphere { radius } => (ColliderBuilder::ball(radius), math::IDENTITY),
+                    // Rapier cylinders run along y, URDF ones along z: rotate y onto z.
+                    Shape::Cylinder { radius, length } => (
+                        ColliderBuilder::cylinder(length / 2.0, radius),
+                        math::axis_angle([1.0, 0.0, 0.0], std::f64::consts::FRAC_PI_2),
+                    ),
+                };
+                let pose = origin.mul(&Iso::from_rotation(extra)).to_pose();
+                let collider = builder
+                    .position(pose)
+                    .density(0.0)
+                    .friction(friction)
+                    .collision_groups(InteractionGroups::new(
+                        ROBOT_GROUP,
+                        robot_filter,
+                        InteractionTestMode::And,
+                    ));
+                colliders[l].push(world.insert_collider(collider, Some(handle)));
+            }
+        }
+
+        let mut axis_in_parent = vec![Vector::X; n_joints];
+        for &ji in model.joint_order() {
+            let j = &model.joints()[ji];
+            let (locked, frame_rot) = match j.kind {
+                JointKind::Fixed => (JointAxesMask::LOCKED_FIXED_AXES, math::IDENTITY),
+                _ => (JointAxesMask::LOCKED_REVOLUTE_AXES, math::x_onto(j.axis)),
+            };
+            let frame1 = j.origin.mul(&Iso::from_rotation(frame_rot));
+            let frame2 = Iso::from_rotation(frame_rot);
+            let mut builder = GenericJointBuilder::new(locked)
+                .local_frame1(frame1.to_pose())
+                .local_frame2(frame2.to_pose())
+                .contacts_enabled(false);
+            if let Some([lo, hi]) = j.limits {
+                builder = builder.limits(JointAxis::AngX, [lo as f32, hi as f32]);
+            }
+            let a = math::mat_vec(&j.origin.r, j.axis);
+            axis_in_parent[ji] = Vector::new(a[0] as f32, a[1] as f32, a[2] as f32);
+            // Insertion only fails for a link that already has a parent or would close a loop,
+            // which a validated (tree) model never asks for.
+            let _ = world.multibody_joints.insert(
+                bodies[j.parent],
+                bodies[j.child],
+                builder.build(),
+                true,
+            );
+        }
+
+        let mut multibody = None;
+        let mut link_ids = vec![0usize; n_joints];
+        // Rapier only creates multibodies through joints: a lone link stays a plain rigid body.
+        if let Some(id) = world
+            .multibody_joints
+            .rigid_body_link(bodies[root])
+            .copied()
+        {
+            let index = id.multibody;
+            multibody = Some(index);
+            for (ji, j) in model.joints().iter().enumerate() {
+                if let Some(link) = world.multibody_joints.rigid_body_link(bodies[j.child]) {
+                    link_ids[ji] = link.id;
+                }
+            }
+            let world_bodies = &world.bodies;
+            if let Some(mb) = world.multibody_joints.get_multibody_mut(index) {
+                mb.set_self_contacts_enabled(setup.physics.self_collisions);
+                for (ji, j) in model.joints().iter().enumerate() {
+                    if j.kind == JointKind::Fixed {
+                        continue;
+                    }
+                    let q = state.q.get(ji).copied().unwrap_or(0.0) as f32;
+                    if let Some(link) = mb.link_mut(link_ids[ji]) {
+                        link.joint.apply_displacement(&[q]);
+                    }
+                }
+                // Resolves the root type (fixed roots drop their 6 free DoFs) and poses.
+                mb.forward_kinematics(world_bodies, true);
+            }
+            if let Some(mb) = world.multibody_joints.get_multibody(index) {
+                mb.update_rigid_bodies(&mut world.bodies, true);
+            }
+            if let Some(mb) = world.multibody_joints.get_multibody_mut(index) {
+                // Rapier gives every angular DoF (the free root's too) a default damping of
+                // 0.1; the URDF's <dynamics> is the only damping we want.
+                mb.damping_mut().fill(0.0);
+                let mut dofs = Vec::new();
+                for (ji, j) in model.joints().iter().enumerate() {
+                    if j.kind == JointKind::Fixed {
+                        continue;
+                    }
+                    if let Some(link) = mb.link(link_ids[ji]) {
+                        dofs.push((link.assembly_id(), ji));
+                    }
+                }
+                for &(dof, ji) in &dofs {
+                    let j = &model.joints()[ji];
+                    mb.damping_mut()[dof] = j.damping as f32;
+                    mb.frictions_mut()[dof] = j.friction as f32;
+                    mb.generalized_velocity_mut()[dof] =
+                        state.qd.get(ji).copied().unwrap_or(0.0) as f32;
+                }
+            }
+        }
+
+        Self {
+            world,
+            bodies,
+            colliders,
+            ground,
+            multibody,
+            link_ids,
+            axis_in_parent,
+            torques: vec![0.0; n_joints],
+            dt: setup.dt,
+            time: 0.0,
+            model,
+        }
+    }
+
+    /// The model this world was built from.
+    pub fn model(&self) -> &Arc<RobotModel> {
+        &self.model
+    }
+
+    /// Rapier step, s.
+    pub fn dt(&self) -> f32 {
+        self.dt
+    }
+
+    /// Simulated time since construction, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    fn mb(&self) -> Option<&Multibody> {
+        self.multibody
+            .and_then(|i| self.world.multibody_joints.get_multibody(i))
+    }
+
+    /// Position of joint `j` (URDF order), rad; 0 for fixed joints.
+    pub fn joint_position(&self, j: usize) -> f32 {
+        if self.model.joints()[j].kind == JointKind::Fixed {
+            return 0.0;
+        }
+        self.mb()
+            .and_then(|mb| mb.link(self.link_ids[j]))
+            .map_or(0.0, |l| l.joint().coords()[3])
+    }
+
+    /// Velocity of joint `j` (URDF order), rad/s; 0 for fixed joints.
+    pub fn joint_velocity(&self, j: usize) -> f32 {
+        if self.model.joints()[j].kind == JointKind::Fixed {
+            return 0.0;
+        }
+        self.mb()
+            .and_then(|mb| {
+                mb.link(self.link_ids[j])
+                    .map(|l| mb.generalized_velocity()[l.assembly_id()])
+            })
+            .unwrap_or(0.0)
+    }
+
+    /// Sets the torque applied at joint `j` (URDF order), N·m, positive about the joint axis
+    /// on the child (and its reaction on the parent). It is applied, unchanged, at every
+    /// following [`Self::step`] until set again. No clamping here: callers clamp to effort.
+    pub fn set_joint_torque(&mut self, j: usize, torque: f32) {
+        self.torques[j] = if torque.is_finite() { torque } else { 0.0 };
+    }
+
+    /// Holds joint `j` at `target` (rad) with an implicit spring-damper of stiffness `kp`
+    /// (N·m/rad) and damping `kd` (N·m·s/rad, added to the URDF damping), integrated by Rapier
+    /// inside every solver substep: a PD position servo that is stable at any gain, unlike a PD
+    /// evaluated once per control period. `kp = kd = 0` removes it. Not used by the RL
+    /// environments (their joints are torque-controlled); meant for holding poses and tests.
+    pub fn set_joint_servo(&mut self, j: usize, target: f32, kp: f32, kd: f32) {
+        let joint = &self.model.joints()[j];
+        if joint.kind == JointKind::Fixed {
+            return;
+        }
+        let (kp, kd) = (kp.max(0.0), kd.max(0.0));
+        let base_damping = joint.damping as f32;
+        let link_id = self.link_ids[j];
+        if let Some(mb) = self
+            .multibody
+            .and_then(|i| self.world.multibody_joints.get_multibody_mut(i))
+        {
+            let Some(link) = mb.link_mut(link_id) else {
+                return;
+            };
+            // Axis 3 of the 6-DoF layout is the angular x axis, our revolute axis.
+            link.joint.set_spring(3, kp, target);
+            let dof = link.assembly_id();
+            mb.damping_mut()[dof] = base_damping + kd;
+        }
+    }
+
+    /// The torque currently commanded at joint `j`, N·m.
+    pub fn joint_torque(&self, j: usize) -> f32 {
+        self.torques[j]
+    }
+
+    /// Advances the world by one Rapier step of [`Self::dt`].
+    ///
+    /// Torques go in as a pair of equal and opposite external torques `±τ·a` on the child and
+    /// parent links, `a` the joint axis in the world at the start of the step. Rapier maps link
+    /// wrenches to generalised forces through the link Jacobians: the pair contributes exactly
+    /// `τ` to the joint's own coordinate and cancels on every other one.
+    pub fn step(&mut self) {
+        for &h in &self.bodies {
+            if let Some(rb) = self.world.bodies.get_mut(h) {
+                rb.reset_torques(false);
+            }
+        }
+        for (ji, j) in self.model.joints().iter().enumerate() {
+            let tau = self.torques[ji];
+            if tau == 0.0 || j.kind == JointKind::Fixed {
+                continue;
+            }
+            let Some(parent_rot) = self
+                .world
+                .bodies
+                .get(self.bodies[j.parent])
+                .map(|b| *b.rotation())
+            else {
+                continue;
+            };
+            let t = parent_rot * self.axis_in_parent[ji] * tau;
+            if let Some(rb) = self.world.bodies.get_mut(self.bodies[j.child]) {
+                rb.add_torque(t, false);
+            }
+            if let Some(rb) = self.world.bodies.get_mut(self.bodies[j.parent]) {
+                if rb.is_dynamic() {
+                    rb.add_torque(-t, false);
+                }
+            }
+        }
+        self.world.step();
+        self.time += self.dt as f64;
+    }
+
+    /// World pose of link `l`'s frame.
+    pub fn link_pose(&self, l: usize) -> Pose {
+        self.world
+            .bodies
+            .get(self.bodies[l])
+            .map_or(Pose::IDENTITY, |b| *b.position())
+    }
+
+    /// World linear velocity of link `l`'s frame origin, m/s.
+    pub fn link_origin_velocity(&self, l: usize) -> Vector {
+        self.world
+            .bodies
+            .get(self.bodies[l])
+            .map_or(Vector::ZERO, |b| {
+                b.velocity_at_point(b.position().translation)
+            })
+    }
+
+    /// World angular velocity of link `l`, rad/s.
+    pub fn link_angular_velocity(&self, l: usize) -> Vector {
+        self.world
+            .bodies
+            .get(self.bodies[l])
+            .map_or(Vector::ZERO, |b| b.angvel())
+    }
+
+    /// All link frames in the world, URDF link order.
+    pub fn link_poses(&self) -> Vec<LinkPose> {
+        self.model
+            .links()
+            .iter()
+            .enumerate()
+            .map(|(l, link)| {
+                let p = self.link_pose(l);
+                LinkPose {
+                    name: link.name.clone(),
+                    translation: p.translation.to_array(),
+                    rotation: p.rotation.to_array(),
+                }
+            })
+            .collect()
+    }
+
+    /// Total mass as Rapier sees it (sum of rigid-body masses), kg.
+    pub fn total_mass(&self) -> f32 {
+        self.bodies
+            .iter()
+            .filter_map(|&h| self.world.bodies.get(h))
+            .map(|b| b.mass())
+            .sum()
+    }
+
+    /// Whole-body centre of mass as Rapier sees it, world frame, m.
+    pub fn center_of_mass(&self) -> Vector {
+        let mut m = 0.0;
+        let mut c = Vector::ZERO;
+        for b in self.bodies.iter().filter_map(|&h| self.world.bodies.get(h)) {
+            m += b.mass();
+            c += b.center_of_mass() * b.mass();
+        }
+        if m > 0.0 {
+            c / m
+        } else {
+            c
+        }
+    }
+
+    /// Normal force the ground exerts on link `l` (all its colliders), N, averaged over the
+    /// last Rapier step. Zero without ground or contact.
+    pub fn ground_normal_force(&self, l: usize) -> f32 {
+        let Some(ground) = self.ground else {
+            return 0.0;
+        };
+        let mut impulse = 0.0;
+        for &c in &self.colliders[l] {
+            if let Some(pair) = self.world.narrow_phase.contact_pair(c, ground) {
+                impulse += pair.total_impulse().z.abs();
+            }
+        }
+        // Rapier reports the impulse accumulated over the whole step (all solver substeps).
+        impulse / self.dt
+    }
+
+    /// The Rapier world, for inspection.
+    pub fn world(&self) -> &PhysicsWorld {
+        &self.world
+    }
+}

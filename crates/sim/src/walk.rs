@@ -1,0 +1,825 @@
+//! `WalkEnv`: the humanoid on the 50 m flat track (SPEC §2, paper §5).
+//!
+//! # Observation (43 values for the embedded humanoid)
+//!
+//! Sizes follow the model: `n_a` actuated joints, `n_p` passive (non-actuated, movable)
+//! joints, in URDF order. All values are SI, f32; "body frame" is the torso link frame.
+//!
+//! | index (humanoid) | size | quantity |
+//! |---|---|---|
+//! | 0 | 1 | torso height error `z − z_stand`, m |
+//! | 1 | 1 | torso lateral offset `y` from the track centre line, m |
+//! | 2–5 | 4 | torso orientation quaternion `x, y, z, w` (world) |
+//! | 6–8 | 3 | torso linear velocity (of the link origin), body frame, m/s |
+//! | 9–11 | 3 | torso angular velocity, body frame, rad/s |
+//! | 12–14 | 3 | torso linear acceleration, body frame, m/s² (finite difference of the world velocity over the control period, gravity not included; 0 after reset) |
+//! | 15–20 | `n_a` | actuated joint angles, rad (left hip, knee, ankle, right hip, knee, ankle) |
+//! | 21–26 | `n_a` | actuated joint velocities, rad/s |
+//! | 27–30 | `n_p` | passive joint angles, rad (left shoulder pitch, roll, right shoulder pitch, roll) |
+//! | 31–34 | `n_p` | passive joint velocities, rad/s |
+//! | 35–36 | 2 | left, right foot normal contact force / body weight |
+//! | 37–42 | `n_a` | previous action (the clamped action of the last step; 0 after reset) |
+//!
+//! [`WalkEnv::obs_layout`] gives the ranges and [`WalkEnv::obs_names`] a name per index.
+//!
+//! # Reward (paper eq. 12)
+//!
+//! `r = w_v·vx − w_y·y² − w_z·z² − w_P·P + c`, defaults `w_v = 1, w_y = 5, w_z = 25,
+//! w_P = 0.0005, c = 0.025`: `vx` the torso's forward (world x) velocity, `y` its lateral
+//! offset, `z` its height error, `P` the mean over actuated joints of `|τ·ω|` (averaged over
+//! the physics steps of the control period). Each term is reported in
+//! [`StepInfo::reward_terms`](crate::StepInfo) as `forward`, `lateral`, `height`, `power`,
+//! `alive`; they sum to the reward.
+//!
+//! # Episode
+//!
+//! Truncated after `episode_seconds / control_period` steps (60 s / 0.025 s = 2400).
+//! Terminated on a fall: torso origin more than [`FallConfig::max_height_drop`] below its
+//! standing height, torso z axis tilted more than [`FallConfig::max_tilt`] from vertical, or a
+//! non-finite state. Terminated with success when the torso origin passes `x = track_length`.
+
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rapier3d::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::env::{Env, GaitSample, Step, StepInfo};
+use crate::error::SimError;
+use crate::math::Iso;
+use crate::model::{JointKind, LinkGeometry, LinkPose, RobotModel};
+use crate::sim::{Base, PhysicsConfig, RobotSim, RobotState, SimSetup};
+
+/// Reward coefficients of paper eq. 12.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RewardConfig {
+    /// Weight of the forward velocity `vx`. Default 1 (eq. 12).
+    pub forward: f32,
+    /// Weight of the lateral penalty `y²`. Default 5 (eq. 12).
+    pub lateral: f32,
+    /// Weight of the vertical penalty `z²`. Default 25 (eq. 12).
+    pub height: f32,
+    /// Weight of the power penalty `P`. Default 0.0005 (eq. 12).
+    pub power: f32,
+    /// Constant reward per step for staying up. Default 0.025 (eq. 12).
+    pub alive: f32,
+}
+
+impl Default for RewardConfig {
+    fn default() -> Self {
+        Self {
+            forward: 1.0,
+            lateral: 5.0,
+            height: 25.0,
+            power: 0.0005,
+            alive: 0.025,
+        }
+    }
+}
+
+/// When an episode ends in a fall.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FallConfig {
+    /// Fall when the torso origin is more than this below its standing height, m. Default 0.30
+    /// (our choice: the paper's walking gaits stay within ±0.12 m, a deep squat does not).
+    pub max_height_drop: f32,
+    /// Fall when the torso's z axis is tilted more than this from vertical, rad. Default
+    /// π/4 (45°, our choice, as MATLAB's walking-robot examples stop at 45° roll/pitch).
+    pub max_tilt: f32,
+}
+
+impl Default for FallConfig {
+    fn default() -> Self {
+        Self {
+            max_height_drop: 0.30,
+            max_tilt: std::f32::consts::FRAC_PI_4,
+        }
+    }
+}
+
+/// Seeded perturbation of the standing pose at reset (uniform, ± the given half-widths).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct InitNoise {
+    /// Joint angle half-width, rad. Default 0.01 (Gymnasium Humanoid-v5 `reset_noise_scale`).
+    pub joint_angle: f32,
+    /// Joint velocity half-width, rad/s. Default 0.01 (Gymnasium Humanoid-v5).
+    pub joint_velocity: f32,
+}
+
+impl Default for InitNoise {
+    fn default() -> Self {
+        Self {
+            joint_angle: 0.01,
+            joint_velocity: 0.01,
+        }
+    }
+}
+
+/// Configuration of [`WalkEnv`]. Every field has a default; TOML files may give any subset.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct WalkConfig {
+    /// URDF file to load instead of the embedded humanoid. Default none (embedded
+    /// `assets/humanoid.urdf`, SPEC §1).
+    pub urdf: Option<PathBuf>,
+    /// Control period Ts, s. Default 0.025 (paper §5).
+    pub control_period: f32,
+    /// Episode length Tf, s; truncation after `Tf / Ts` steps. Default 60 (paper §5).
+    pub episode_seconds: f32,
+    /// Track length, m: success (termination) when the torso passes `x = track_length`.
+    /// Default 50 (paper Fig. 4).
+    pub track_length: f32,
+    /// Physics settings (step, solver, contact).
+    pub physics: PhysicsConfig,
+    /// Reward coefficients (paper eq. 12).
+    pub reward: RewardConfig,
+    /// Fall thresholds.
+    pub fall: FallConfig,
+    /// Reset noise.
+    pub init_noise: InitNoise,
+    /// Torque-controlled joints, in action order. Default the six leg joints `left_hip,
+    /// left_knee, left_ankle, right_hip, right_knee, right_ankle` (SPEC §1).
+    pub actuated_joints: Vec<String>,
+    /// Left and right foot links (contact-force observations). Default `left_foot, right_foot`.
+    pub foot_links: [String; 2],
+    /// Standing pose, joint name → angle (rad); unlisted joints stand at 0 clamped into their
+    /// limits. Default hips −2°, knees 10°, ankles −8°: knees bent (≥ 5°, paper §5), torso
+    /// upright, feet flat, and the body leaning forward so that the centre of mass lies 4.6 cm
+    /// in front of the ankles, as in quiet human standing (Winter 1995, "Human balance and
+    /// posture control during standing and walking", Gait & Posture 3:193–214).
+    pub standing_pose: BTreeMap<String, f32>,
+}
+
+impl Default for WalkConfig {
+    fn default() -> Self {
+        let deg = std::f32::consts::PI / 180.0;
+        let mut standing_pose = BTreeMap::new();
+        for side in ["left", "right"] {
+            standing_pose.insert(format!("{side}_hip"), -2.0 * deg);
+            standing_pose.insert(format!("{side}_knee"), 10.0 * deg);
+            standing_pose.insert(format!("{side}_ankle"), -8.0 * deg);
+        }
+        Self {
+            urdf: None,
+            control_period: 0.025,
+            episode_seconds: 60.0,
+            track_length: 50.0,
+            physics: PhysicsConfig::default(),
+            reward: RewardConfig::default(),
+            fall: FallConfig::default(),
+            init_noise: InitNoise::default(),
+            actuated_joints: [
+                "left_hip",
+                "left_knee",
+                "left_ankle",
+                "right_hip",
+                "right_knee",
+                "right_ankle",
+            ]
+            .map(String::from)
+            .to_vec(),
+            foot_links: ["left_foot".into(), "right_foot".into()],
+            standing_pose,
+        }
+    }
+}
+
+fn config_err(field: &str, value: impl ToString, reason: &str) -> SimError {
+    SimError::Config {
+        field: field.to_owned(),
+        value: value.to_string(),
+        reason: reason.to_owned(),
+    }
+}
+
+impl WalkConfig {
+    /// Checks every value, naming the field at fault.
+    pub fn validate(&self) -> Result<(), SimError> {
+        let pos = |field: &str, v: f32| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(config_err(field, v, "must be finite and > 0"))
+            }
+        };
+        let nonneg = |field: &str, v: f32| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(config_err(field, v, "must be finite and ≥ 0"))
+            }
+        };
+        let fin = |field: &str, v: f32| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(config_err(field, v, "must be finite"))
+            }
+        };
+        pos("control_period", self.control_period)?;
+        pos("episode_seconds", self.episode_seconds)?;
+        if self.episode_seconds / self.control_period > 1e8 {
+            return Err(config_err(
+                "episode_seconds",
+                self.episode_seconds,
+                "gives more than 1e8 steps per episode",
+            ));
+        }
+        pos("track_length", self.track_length)?;
+        self.physics.validate("physics.")?;
+        fin("reward.forward", self.reward.forward)?;
+        fin("reward.lateral", self.reward.lateral)?;
+        fin("reward.height", self.reward.height)?;
+        fin("reward.power", self.reward.power)?;
+        fin("reward.alive", self.reward.alive)?;
+        pos("fall.max_height_drop", self.fall.max_height_drop)?;
+        pos("fall.max_tilt", self.fall.max_tilt)?;
+        nonneg("init_noise.joint_angle", self.init_noise.joint_angle)?;
+        nonneg("init_noise.joint_velocity", self.init_noise.joint_velocity)?;
+        if self.actuated_joints.is_empty() {
+            return Err(config_err(
+                "actuated_joints",
+                "[]",
+                "needs at least one joint",
+            ));
+        }
+        for (name, v) in &self.standing_pose {
+            fin(&format!("standing_pose.{name}"), *v)?;
+        }
+        Ok(())
+    }
+
+    /// Loads the model this config names (the embedded humanoid by default).
+    pub fn load_model(&self) -> Result<Arc<RobotModel>, SimError> {
+        Ok(match &self.urdf {
+            Some(path) => Arc::new(RobotModel::from_urdf_path(path)?),
+            None => RobotModel::humanoid_shared()?,
+        })
+    }
+}
+
+/// Index ranges of the observation vector (see the module docs for units and frames).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct ObsLayout {
+    /// Torso height error.
+    pub height_error: usize,
+    /// Torso lateral offset.
+    pub lateral_offset: usize,
+    /// Torso quaternion x, y, z, w.
+    pub orientation: Range<usize>,
+    /// Torso linear velocity, body frame.
+    pub linear_velocity: Range<usize>,
+    /// Torso angular velocity, body frame.
+    pub angular_velocity: Range<usize>,
+    /// Torso linear acceleration, body frame.
+    pub acceleration: Range<usize>,
+    /// Actuated joint angles.
+    pub joint_angles: Range<usize>,
+    /// Actuated joint velocities.
+    pub joint_velocities: Range<usize>,
+    /// Passive joint angles.
+    pub passive_angles: Range<usize>,
+    /// Passive joint velocities.
+    pub passive_velocities: Range<usize>,
+    /// Left, right foot normal force / body weight.
+    pub foot_forces: Range<usize>,
+    /// Previous action.
+    pub previous_action: Range<usize>,
+    /// Total length.
+    pub len: usize,
+}
+
+impl ObsLayout {
+    fn new(n_a: usize, n_p: usize) -> Self {
+        let mut at = 2;
+        let mut take = |n: usize| {
+            let r = at..at + n;
+            at += n;
+            r
+        };
+        let orientation = take(4);
+        let linear_velocity = take(3);
+        let angular_velocity = take(3);
+        let acceleration = take(3);
+        let joint_angles = take(n_a);
+        let joint_velocities = take(n_a);
+        let passive_angles = take(n_p);
+        let passive_velocities = take(n_p);
+        let foot_forces = take(2);
+        let previous_action = take(n_a);
+        Self {
+            height_error: 0,
+            lateral_offset: 1,
+            orientation,
+            linear_velocity,
+            angular_velocity,
+            acceleration,
+            joint_angles,
+            joint_velocities,
+            passive_angles,
+            passive_velocities,
+            foot_forces,
+            previous_action,
+            len: at,
+        }
+    }
+}
+
+/// Everything a [`WalkEnv`] shares with its siblings: the parsed model and resolved names.
+#[derive(Debug)]
+struct WalkShared {
+    model: Arc<RobotModel>,
+    config: WalkConfig,
+    torso: usize,
+    feet: [usize; 2],
+    actuated: Vec<usize>,
+    passive: Vec<usize>,
+    effort: Vec<f32>,
+    /// Standing pose, one entry per joint (URDF order).
+    standing_q: Vec<f64>,
+    standing_height: f64,
+    weight: f32,
+    setup: SimSetup,
+    max_steps: usize,
+    layout: ObsLayout,
+}
+
+/// The walking task. See the [module docs](self) for observation, reward and episode.
+pub struct WalkEnv {
+    shared: Arc<WalkShared>,
+    sim: RobotSim,
+    prev_action: Vec<f32>,
+    prev_velocity: Vector,
+    acceleration: Vector,
+    steps: usize,
+    last_power: Vec<f32>,
+    last_abs_power: Vec<f32>,
+}
+
+impl WalkEnv {
+    /// Builds the environment described by `config` (loading its URDF).
+    pub fn new(config: WalkConfig) -> Result<Self, SimError> {
+        config.validate()?;
+        let model = config.load_model()?;
+        Self::from_model(model, config)
+    }
+
+    /// Builds the environment on an already parsed model (`config.urdf` is ignored).
+    pub fn from_model(model: Arc<RobotModel>, config: WalkConfig) -> Result<Self, SimError> {
+        config.validate()?;
+        let torso = model.root();
+        let mut actuated = Vec::with_capacity(config.actuated_joints.len());
+        for name in &config.actuated_joints {
+            let Some(j) = model.joint_index(name) else {
+                return Err(SimError::Model {
+                    field: "actuated_joints".into(),
+                    reason: format!("the model has no joint `{name}`"),
+                });
+            };
+            let joint = &model.joints()[j];
+            if joint.kind == JointKind::Fixed {
+                return Err(SimError::Model {
+                    field: "actuated_joints".into(),
+                    reason: format!("joint `{name}` is fixed"),
+                });
+            }
+            if !(joint.effort.is_finite() && joint.effort > 0.0) {
+                return Err(SimError::Model {
+                    field: "actuated_joints".into(),
+                    reason: format!(
+                        "joint `{name}` needs a finite <limit effort> > 0 to scale actions, got {}",
+                        joint.effort
+                    ),
+                });
+            }
+            if actuated.contains(&j) {
+                return Err(SimError::Model {
+                    field: "actuated_joints".into(),
+                    reason: format!("joint `{name}` is listed twice"),
+                });
+            }
+            actuated.push(j);
+        }
+        let passive: Vec<usize> = (0..model.joints().len())
+            .filter(|j| model.joints()[*j].is_movable() && !actuated.contains(j))
+            .collect();
+        let mut feet = [0; 2];
+        for (k, name) in config.foot_links.iter().enumerate() {
+            feet[k] = model.link_index(name).ok_or_else(|| SimError::Model {
+                field: "foot_links".into(),
+                reason: format!("the model has no link `{name}`"),
+            })?;
+        }
+        for name in config.standing_pose.keys() {
+            if model.joint_index(name).is_none() {
+                return Err(SimError::Model {
+                    field: format!("standing_pose.{name}"),
+                    reason: format!("the model has no joint `{name}`"),
+                });
+            }
+        }
+        let standing_q: Vec<f64> = model
+            .joints()
+            .iter()
+            .map(|j| {
+                let q = config.standing_pose.get(&j.name).copied().unwrap_or(0.0) as f64;
+                match j.limits {
+                    Some([lo, hi]) => q.clamp(lo, hi),
+                    None => q,
+                }
+            })
+            .collect();
+        let poses = model.forward_kinematics(&Iso::IDENTITY, &standing_q);
+        let standing_height = -model.lowest_point(&poses);
+        if !standing_height.is_finite() {
+            return Err(SimError::Model {
+                field: "urdf".into(),
+                reason: "the model has no collision shape to stand on".into(),
+            });
+        }
+        let substeps = config.physics.substeps;
+        let setup = SimSetup {
+            dt: config.control_period / substeps as f32,
+            physics: config.physics.clone(),
+            base: Base::Floating,
+            ground: true,
+        };
+        let max_steps = (config.episode_seconds / config.control_period)
+            .round()
+            .max(1.0) as usize;
+        let effort = actuated
+            .iter()
+            .map(|&j| model.joints()[j].effort as f32)
+            .collect();
+        let weight = (model.total_mass() * config.physics.gravity as f64) as f32;
+        let layout = ObsLayout::new(actuated.len(), passive.len());
+        let state = RobotState {
+            base_position: [0.0, 0.0, standing_height],
+            q: standing_q.clone(),
+            qd: vec![0.0; standing_q.len()],
+        };
+        let sim = RobotSim::new(model.clone(), &setup, &state)?;
+        let n_a = actuated.len();
+        let shared = Arc::new(WalkShared {
+            model,
+            config,
+            torso,
+            feet,
+            actuated,
+            passive,
+            effort,
+            standing_q,
+            standing_height,
+            weight,
+            setup,
+            max_steps,
+            layout,
+        });
+        Ok(Self {
+            shared,
+            sim,
+            prev_action: vec![0.0; n_a],
+            prev_velocity: Vector::ZERO,
+            acceleration: Vector::ZERO,
+            steps: 0,
+            last_power: vec![0.0; n_a],
+            last_abs_power: vec![0.0; n_a],
+        })
+    }
+
+    /// Another environment on the same parsed model and config, standing still (cheap: no
+    /// URDF parsing). Call [`Env::reset`] before use.
+    pub fn spawn(&self) -> Self {
+        let s = &self.shared;
+        let state = RobotState {
+            base_position: [0.0, 0.0, s.standing_height],
+            q: s.standing_q.clone(),
+            qd: vec![0.0; s.standing_q.len()],
+        };
+        let sim = RobotSim::build(s.model.clone(), &s.setup, &state);
+        let n_a = s.actuated.len();
+        Self {
+            shared: self.shared.clone(),
+            sim,
+            prev_action: vec![0.0; n_a],
+            prev_velocity: Vector::ZERO,
+            acceleration: Vector::ZERO,
+            steps: 0,
+            last_power: vec![0.0; n_a],
+            last_abs_power: vec![0.0; n_a],
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &WalkConfig {
+        &self.shared.config
+    }
+
+    /// The robot model.
+    pub fn model(&self) -> &Arc<RobotModel> {
+        &self.shared.model
+    }
+
+    /// The physics world (for inspection and tests).
+    pub fn sim(&self) -> &RobotSim {
+        &self.sim
+    }
+
+    /// The physics world, mutable (e.g. to add joint servos in tests). Changes last until the
+    /// next [`Env::reset`], which rebuilds the world.
+    pub fn sim_mut(&mut self) -> &mut RobotSim {
+        &mut self.sim
+    }
+
+    /// Actuated joint names, in action order.
+    pub fn actuated_joint_names(&self) -> &[String] {
+        &self.shared.config.actuated_joints
+    }
+
+    /// Passive joint names, in observation order.
+    pub fn passive_joint_names(&self) -> Vec<&str> {
+        self.shared
+            .passive
+            .iter()
+            .map(|&j| self.shared.model.joints()[j].name.as_str())
+            .collect()
+    }
+
+    /// Effort limits of the actuated joints (torque at action ±1), N·m.
+    pub fn effort_limits(&self) -> &[f32] {
+        &self.shared.effort
+    }
+
+    /// Standing-pose angles of the actuated joints, rad.
+    pub fn standing_pose(&self) -> Vec<f32> {
+        self.shared
+            .actuated
+            .iter()
+            .map(|&j| self.shared.standing_q[j] as f32)
+            .collect()
+    }
+
+    /// Whole-body centre of mass in the standing pose, relative to the torso origin, m
+    /// (from the model, not the simulation).
+    pub fn standing_com(&self) -> [f32; 3] {
+        let s = &self.shared;
+        s.model
+            .center_of_mass(&Iso::IDENTITY, &s.standing_q)
+            .map(|v| v as f32)
+    }
+
+    /// Torso origin height in the standing pose with the feet on the ground, m.
+    pub fn standing_height(&self) -> f32 {
+        self.shared.standing_height as f32
+    }
+
+    /// Total mass × gravity, N.
+    pub fn body_weight(&self) -> f32 {
+        self.shared.weight
+    }
+
+    /// Index ranges of the observation.
+    pub fn obs_layout(&self) -> &ObsLayout {
+        &self.shared.layout
+    }
+
+    /// A name for every observation index, e.g. `joint_angle/left_knee`.
+    pub fn obs_names(&self) -> Vec<String> {
+        let s = &self.shared;
+        let joint = |j: &usize| s.model.joints()[*j].name.clone();
+        let mut names = vec!["height_error".to_owned(), "lateral_offset".to_owned()];
+        names.extend(["x", "y", "z", "w"].map(|c| format!("orientation/{c}")));
+        names.extend(["x", "y", "z"].map(|c| format!("linear_velocity/{c}")));
+        names.extend(["x", "y", "z"].map(|c| format!("angular_velocity/{c}")));
+        names.extend(["x", "y", "z"].map(|c| format!("acceleration/{c}")));
+        names.extend(
+            s.actuated
+                .iter()
+                .map(|j| format!("joint_angle/{}", joint(j))),
+        );
+        names.extend(
+            s.actuated
+                .iter()
+                .map(|j| format!("joint_velocity/{}", joint(j))),
+        );
+        names.extend(
+            s.passive
+                .iter()
+                .map(|j| format!("passive_angle/{}", joint(j))),
+        );
+        names.extend(
+            s.passive
+                .iter()
+                .map(|j| format!("passive_velocity/{}", joint(j))),
+        );
+        names.extend(
+            s.config
+                .foot_links
+                .iter()
+                .map(|f| format!("foot_force/{f}")),
+        );
+        names.extend(
+            s.actuated
+                .iter()
+                .map(|j| format!("previous_action/{}", joint(j))),
+        );
+        names
+    }
+
+    /// World poses of every link frame (URDF link order).
+    pub fn link_poses(&self) -> Vec<LinkPose> {
+        self.sim.link_poses()
+    }
+
+    /// Collision geometry of every link, in its link frame (URDF link order).
+    pub fn geometry(&self) -> Vec<LinkGeometry> {
+        self.shared.model.geometry()
+    }
+
+    /// Steps taken since the last reset.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    fn observation(&self) -> Vec<f32> {
+        let s = &self.shared;
+        let pose = self.sim.link_pose(s.torso);
+        let inv = pose.rotation.inverse();
+        let v = inv * self.sim.link_origin_velocity(s.torso);
+        let w = inv * self.sim.link_angular_velocity(s.torso);
+        let a = inv * self.acceleration;
+        let q = pose.rotation;
+        let mut obs = Vec::with_capacity(s.layout.len);
+        obs.push(pose.translation.z - s.standing_height as f32);
+        obs.push(pose.translation.y);
+        obs.extend([q.x, q.y, q.z, q.w]);
+        obs.extend(v.to_array());
+        obs.extend(w.to_array());
+        obs.extend(a.to_array());
+        obs.extend(s.actuated.iter().map(|&j| self.sim.joint_position(j)));
+        obs.extend(s.actuated.iter().map(|&j| self.sim.joint_velocity(j)));
+        obs.extend(s.passive.iter().map(|&j| self.sim.joint_position(j)));
+        obs.extend(s.passive.iter().map(|&j| self.sim.joint_velocity(j)));
+        obs.extend(
+            s.feet
+                .iter()
+                .map(|&f| self.sim.ground_normal_force(f) / s.weight),
+        );
+        obs.extend(self.prev_action.iter().copied());
+        obs
+    }
+}
+
+impl Env for WalkEnv {
+    fn obs_dim(&self) -> usize {
+        self.shared.layout.len
+    }
+
+    fn act_dim(&self) -> usize {
+        self.shared.actuated.len()
+    }
+
+    fn reset(&mut self, seed: u64) -> Vec<f32> {
+        let s = self.shared.clone();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let noise = &s.config.init_noise;
+        let mut q = s.standing_q.clone();
+        let mut qd = vec![0.0; q.len()];
+        for (j, joint) in s.model.joints().iter().enumerate() {
+            if !joint.is_movable() {
+                continue;
+            }
+            let dq = noise.joint_angle as f64 * rng.random_range(-1.0..=1.0);
+            let dqd = noise.joint_velocity as f64 * rng.random_range(-1.0..=1.0);
+            q[j] += dq;
+            if let Some([lo, hi]) = joint.limits {
+                q[j] = q[j].clamp(lo, hi);
+            }
+            qd[j] = dqd;
+        }
+        let poses = s.model.forward_kinematics(&Iso::IDENTITY, &q);
+        let state = RobotState {
+            base_position: [0.0, 0.0, -s.model.lowest_point(&poses)],
+            q,
+            qd,
+        };
+        self.sim = RobotSim::build(s.model.clone(), &s.setup, &state);
+        self.prev_action.fill(0.0);
+        self.prev_velocity = self.sim.link_origin_velocity(s.torso);
+        self.acceleration = Vector::ZERO;
+        self.steps = 0;
+        self.last_power.fill(0.0);
+        self.last_abs_power.fill(0.0);
+        self.observation()
+    }
+
+    fn step(&mut self, action: &[f32]) -> Step {
+        let s = self.shared.clone();
+        let n_a = s.actuated.len();
+        for k in 0..n_a {
+            let a = action.get(k).copied().unwrap_or(0.0);
+            let a = if a.is_finite() {
+                a.clamp(-1.0, 1.0)
+            } else {
+                0.0
+            };
+            self.prev_action[k] = a;
+            self.sim.set_joint_torque(s.actuated[k], a * s.effort[k]);
+        }
+        let substeps = s.config.physics.substeps as usize;
+        self.last_power.fill(0.0);
+        self.last_abs_power.fill(0.0);
+        for _ in 0..substeps {
+            self.sim.step();
+            for k in 0..n_a {
+                let j = s.actuated[k];
+                let p = self.sim.joint_torque(j) * self.sim.joint_velocity(j);
+                self.last_power[k] += p / substeps as f32;
+                self.last_abs_power[k] += p.abs() / substeps as f32;
+            }
+        }
+        self.steps += 1;
+        let v_world = self.sim.link_origin_velocity(s.torso);
+        self.acceleration = (v_world - self.prev_velocity) / s.config.control_period;
+        self.prev_velocity = v_world;
+
+        let obs = self.observation();
+        let pose = self.sim.link_pose(s.torso);
+        let vx = v_world.x;
+        let y = pose.translation.y;
+        let z = pose.translation.z - s.standing_height as f32;
+        let p_mean = self.last_abs_power.iter().sum::<f32>() / n_a as f32;
+        let w = &s.config.reward;
+        let terms = [
+            ("forward", w.forward * vx),
+            ("lateral", -w.lateral * y * y),
+            ("height", -w.height * z * z),
+            ("power", -w.power * p_mean),
+            ("alive", w.alive),
+        ];
+        let mut reward: f32 = terms.iter().map(|t| t.1).sum();
+        let up = pose.rotation * Vector::Z;
+        let tilt = up.z.clamp(-1.0, 1.0).acos();
+        let finite = obs.iter().all(|v| v.is_finite()) && reward.is_finite();
+        if !finite {
+            reward = 0.0;
+        }
+        let fell = !finite || z < -s.config.fall.max_height_drop || tilt > s.config.fall.max_tilt;
+        let success = !fell && pose.translation.x >= s.config.track_length;
+        let terminated = fell || success;
+        let truncated = !terminated && self.steps >= s.max_steps;
+        let feet = s.feet.map(|f| self.sim.ground_normal_force(f));
+        let gait = GaitSample {
+            time: self.steps as f32 * s.config.control_period,
+            torso_position: pose.translation.to_array(),
+            torso_rotation: pose.rotation.to_array(),
+            forward_velocity: vx,
+            lateral_offset: y,
+            height_error: z,
+            joint_angle: s
+                .actuated
+                .iter()
+                .map(|&j| self.sim.joint_position(j))
+                .collect(),
+            joint_velocity: s
+                .actuated
+                .iter()
+                .map(|&j| self.sim.joint_velocity(j))
+                .collect(),
+            joint_torque: s
+                .actuated
+                .iter()
+                .map(|&j| self.sim.joint_torque(j))
+                .collect(),
+            joint_power: self.last_power.clone(),
+            foot_force: feet,
+            fell,
+            success,
+        };
+        Step {
+            obs,
+            reward,
+            terminated,
+            truncated,
+            info: StepInfo {
+                reward_terms: terms.to_vec(),
+                gait: Some(gait),
+            },
+        }
+    }
+
+    fn control_period(&self) -> f32 {
+        self.shared.config.control_period
+    }
+
+    fn max_episode_steps(&self) -> usize {
+        self.shared.max_steps
+    }
+}
