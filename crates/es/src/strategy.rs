@@ -10,6 +10,7 @@
 //! Noise is drawn from a ChaCha8 stream keyed by (seed, generation, individual), so the
 //! population does not depend on which thread evaluates whom.
 
+use esrl_agents::mix_seed;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -112,14 +113,6 @@ pub struct Strategy {
     seed: u64,
 }
 
-/// Mixes three integers into one well-spread 64-bit seed (SplitMix64 finaliser).
-pub fn stream_seed(seed: u64, a: u64, b: u64) -> u64 {
-    let mut z = seed ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xD1B5_4A32_D192_ED03);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 /// Log-rank recombination weights for `n` elites, best first, summing to 1.
 pub fn elite_weights(n: usize) -> Vec<f64> {
     let raw: Vec<f64> = (1..=n)
@@ -157,7 +150,7 @@ impl Strategy {
     /// Individual `index` of the current generation (eq. 8): θ + σ ε with ε from its own stream.
     pub fn perturbation(&self, index: usize) -> Vec<f32> {
         let mut rng =
-            ChaCha8Rng::seed_from_u64(stream_seed(self.seed, self.generation, index as u64));
+            ChaCha8Rng::seed_from_u64(mix_seed(self.seed, self.generation, index as u64));
         let sigma = self.sigma as f32;
         self.mean
             .iter()
