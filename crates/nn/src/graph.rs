@@ -292,7 +292,7 @@ impl<'a> Graph<'a> {
         let mut pgrads: Vec<Option<Vec<f32>>> = self
             .bindings
             .iter()
-            .map(|b| b.trainable.then(|| vec![0.0; b.params.len()]))
+            .map(|b| b.trainable.then(|| crate::pool::zeros(b.params.len())))
             .collect();
         let mut grads: Vec<Option<Tensor>> = (0..self.nodes.len()).map(|_| None).collect();
         if self.nodes[out.0].requires_grad {
@@ -379,6 +379,14 @@ impl<'g, 'a> BackCtx<'g, 'a> {
 pub struct Gradients {
     params: Vec<(u64, Vec<f32>)>,
     vars: Vec<Option<Tensor>>,
+}
+
+impl Drop for Gradients {
+    fn drop(&mut self) {
+        for (_, g) in self.params.drain(..) {
+            crate::pool::recycle(g);
+        }
+    }
 }
 
 impl Gradients {

@@ -9,12 +9,49 @@
 use faer::traits::pulp::Arch;
 use std::sync::OnceLock;
 
-/// Runs `f` compiled for the best SIMD level detected at runtime.
+/// The SIMD level detected at runtime (once).
+#[inline]
+pub(crate) fn arch() -> Arch {
+    static ARCH: OnceLock<Arch> = OnceLock::new();
+    *ARCH.get_or_init(Arch::new)
+}
+
+/// Runs `f` under the runtime SIMD dispatch. Only code LLVM inlines into the dispatched
+/// function gets the wider instruction set; for hot loops use [`simd_fn!`] instead, which
+/// guarantees it.
 #[inline(always)]
 pub(crate) fn simd<R>(f: impl FnOnce() -> R) -> R {
-    static ARCH: OnceLock<Arch> = OnceLock::new();
-    ARCH.get_or_init(Arch::new).dispatch(f)
+    arch().dispatch(f)
 }
+
+/// Defines a function whose body is compiled once per SIMD level and dispatched at runtime.
+///
+/// A closure passed to `pulp::Arch::dispatch` is one function shared by every branch of the
+/// dispatch, so LLVM does not inline it and its loops stay SSE2. Here the body sits in an
+/// `#[inline(always)]` generic `with_simd`, instantiated (and inlined) per level, so plain
+/// loops are vectorised with AVX2+FMA where available. All reference arguments use `'a`.
+macro_rules! simd_fn {
+    ($(#[$m:meta])* $vis:vis fn $name:ident<'a>($($arg:ident : $ty:ty),* $(,)?) $body:block) => {
+        $(#[$m])*
+        #[allow(clippy::too_many_arguments)]
+        $vis fn $name<'a>($($arg: $ty),*) {
+            struct Kernel<'a> {
+                $($arg: $ty,)*
+                _l: std::marker::PhantomData<&'a ()>,
+            }
+            impl<'a> faer::traits::pulp::WithSimd for Kernel<'a> {
+                type Output = ();
+                #[inline(always)]
+                fn with_simd<S: faer::traits::pulp::Simd>(self, _simd: S) {
+                    let Kernel { $($arg,)* _l } = self;
+                    $body
+                }
+            }
+            $crate::kern::arch().dispatch(Kernel { $($arg,)* _l: std::marker::PhantomData })
+        }
+    };
+}
+pub(crate) use simd_fn;
 
 const LOG2E: f32 = std::f32::consts::LOG2_E;
 const LN2_HI: f32 = 0.693_359_4;

@@ -138,6 +138,7 @@ mod nets;
 mod ops;
 mod optim;
 mod params;
+mod pool;
 mod tensor;
 
 pub mod bench;

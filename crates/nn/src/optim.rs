@@ -179,7 +179,9 @@ impl Adam {
         let mut g = grads
             .take(params)
             .ok_or(NnError::NoGradient { len: params.len() })?;
-        self.step(params, &mut g)
+        let r = self.step(params, &mut g);
+        crate::pool::recycle(g);
+        r
     }
 
     /// One step on `params` with the loss gradient `grad` (consumed: clipped in place).

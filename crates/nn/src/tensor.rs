@@ -5,11 +5,27 @@
 /// Sequence batches use the **time-major** convention: a batch of `B` sequences of `T` steps
 /// with `D` features is a `(T·B, D)` matrix whose row `t·B + b` is step `t` of sequence `b`.
 /// That makes each time step a contiguous `(B, D)` block, which is what the LSTM needs.
-#[derive(Clone, Debug, PartialEq, Default)]
+#[derive(Debug, PartialEq, Default)]
 pub struct Tensor {
     rows: usize,
     cols: usize,
     data: Vec<f32>,
+}
+
+impl Clone for Tensor {
+    fn clone(&self) -> Self {
+        Self {
+            rows: self.rows,
+            cols: self.cols,
+            data: crate::pool::copy(&self.data),
+        }
+    }
+}
+
+impl Drop for Tensor {
+    fn drop(&mut self) {
+        crate::pool::recycle(std::mem::take(&mut self.data));
+    }
 }
 
 impl Tensor {
@@ -18,7 +34,17 @@ impl Tensor {
         Self {
             rows,
             cols,
-            data: vec![0.0; rows * cols],
+            data: crate::pool::zeros(rows * cols),
+        }
+    }
+
+    /// A `(rows, cols)` matrix whose contents are unspecified (every element must be
+    /// written before it is read).
+    pub(crate) fn uninit(rows: usize, cols: usize) -> Self {
+        Self {
+            rows,
+            cols,
+            data: crate::pool::dirty(rows * cols),
         }
     }
 
@@ -48,7 +74,7 @@ impl Tensor {
 
     /// Copies a row-major slice.
     pub fn from_slice(rows: usize, cols: usize, data: &[f32]) -> Self {
-        Self::from_vec(rows, cols, data.to_vec())
+        Self::from_vec(rows, cols, crate::pool::copy(data))
     }
 
     /// A `(1, 1)` matrix.
@@ -96,8 +122,8 @@ impl Tensor {
     }
 
     /// Consumes the tensor, returning its buffer.
-    pub fn into_vec(self) -> Vec<f32> {
-        self.data
+    pub fn into_vec(mut self) -> Vec<f32> {
+        std::mem::take(&mut self.data)
     }
 
     /// Row `r` as a slice.
@@ -112,11 +138,12 @@ impl Tensor {
 
     /// Rows `start..start + n` as a new tensor.
     pub fn rows_range(&self, start: usize, n: usize) -> Tensor {
-        Tensor::from_slice(
-            n,
-            self.cols,
-            &self.data[start * self.cols..(start + n) * self.cols],
-        )
+        let c = self.cols;
+        Tensor {
+            rows: n,
+            cols: c,
+            data: crate::pool::copy(&self.data[start * c..(start + n) * c]),
+        }
     }
 
     /// The single value of a `(1, 1)` tensor.
@@ -173,7 +200,7 @@ fn transpose_blocks(x: &Tensor, outer: usize) -> Tensor {
     );
     let inner = x.rows / outer;
     let c = x.cols;
-    let mut out = Tensor::zeros(x.rows, c);
+    let mut out = Tensor::uninit(x.rows, c);
     for o in 0..outer {
         for i in 0..inner {
             let src = (o * inner + i) * c;

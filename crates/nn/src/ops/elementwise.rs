@@ -8,7 +8,7 @@ use crate::tensor::Tensor;
 impl Graph<'_> {
     fn unary(&mut self, x: Var, f: Unary, map: impl Fn(f32) -> f32) -> Var {
         let xv = self.value(x);
-        let mut out = Tensor::zeros(xv.rows(), xv.cols());
+        let mut out = Tensor::uninit(xv.rows(), xv.cols());
         kern::simd(|| {
             for (o, &v) in out.data_mut().iter_mut().zip(xv.data()) {
                 *o = map(v);
@@ -85,7 +85,7 @@ impl Graph<'_> {
     fn binary(&mut self, a: Var, b: Var, f: Binary) -> Var {
         let (av, bv) = (self.value(a), self.value(b));
         let shape = broadcast_shape(av, bv, f);
-        let mut out = Tensor::zeros(shape.0, shape.1);
+        let mut out = Tensor::uninit(shape.0, shape.1);
         let op = |x: f32, y: f32| match f {
             Binary::Add => x + y,
             Binary::Sub => x - y,

@@ -32,7 +32,7 @@ impl<'a> Graph<'a> {
             xv.cols()
         );
         let n = xv.rows();
-        let mut out = Tensor::zeros(n, out_dim);
+        let mut out = Tensor::uninit(n, out_dim);
         linear_forward(
             out.data_mut(),
             xv.data(),
@@ -71,8 +71,44 @@ pub(crate) fn linear_forward(
 pub(crate) fn apply_act(v: &mut [f32], act: Act) {
     match act {
         Act::None => {}
-        Act::Relu => kern::simd(|| v.iter_mut().for_each(|x| *x = x.max(0.0))),
-        Act::Tanh => kern::simd(|| v.iter_mut().for_each(|x| *x = kern::tanh(*x))),
+        Act::Relu => relu_inplace(v),
+        Act::Tanh => tanh_inplace(v),
+    }
+}
+
+kern::simd_fn! {
+    /// v ← max(v, 0).
+    fn relu_inplace<'a>(v: &'a mut [f32]) {
+        for x in v.iter_mut() {
+            *x = x.max(0.0);
+        }
+    }
+}
+
+kern::simd_fn! {
+    /// v ← tanh(v).
+    fn tanh_inplace<'a>(v: &'a mut [f32]) {
+        for x in v.iter_mut() {
+            *x = kern::tanh(*x);
+        }
+    }
+}
+
+kern::simd_fn! {
+    /// d ← d ⊙ 1[y > 0].
+    fn relu_mask<'a>(d: &'a mut [f32], y: &'a [f32]) {
+        for (d, &y) in d.iter_mut().zip(y) {
+            *d = if y > 0.0 { *d } else { 0.0 };
+        }
+    }
+}
+
+kern::simd_fn! {
+    /// d ← d ⊙ (1 − y²).
+    fn tanh_grad<'a>(d: &'a mut [f32], y: &'a [f32]) {
+        for (d, &y) in d.iter_mut().zip(y) {
+            *d *= 1.0 - y * y;
+        }
     }
 }
 
@@ -91,32 +127,16 @@ pub(crate) fn linear_backward(
     let (n, o) = dy.shape();
     let xv = ctx.val(x);
     let i = xv.cols();
-    let dz_owned;
-    let dz: &[f32] = match act {
-        Act::None => dy.data(),
-        Act::Relu => {
-            let mut t = dy.data().to_vec();
-            kern::simd(|| {
-                t.iter_mut().zip(y.data()).for_each(|(d, &y)| {
-                    if y <= 0.0 {
-                        *d = 0.0
-                    }
-                })
-            });
-            dz_owned = t;
-            &dz_owned
+    let mut owned = Vec::new();
+    if act != Act::None {
+        owned = crate::pool::copy(dy.data());
+        match act {
+            Act::Relu => relu_mask(&mut owned, y.data()),
+            Act::Tanh => tanh_grad(&mut owned, y.data()),
+            Act::None => {}
         }
-        Act::Tanh => {
-            let mut t = dy.data().to_vec();
-            kern::simd(|| {
-                t.iter_mut()
-                    .zip(y.data())
-                    .for_each(|(d, &y)| *d *= 1.0 - y * y)
-            });
-            dz_owned = t;
-            &dz_owned
-        }
-    };
+    }
+    let dz: &[f32] = if act == Act::None { dy.data() } else { &owned };
     let p = ctx.pvals(set);
     if let Some(pg) = ctx.pgrad(set) {
         gemm(
@@ -145,15 +165,16 @@ pub(crate) fn linear_backward(
             true,
         );
     }
+    crate::pool::recycle(owned);
 }
 
-/// acc[j] += Σ_r m[r, j] for a row-major (n, c) matrix.
-pub(crate) fn col_sum_into(acc: &mut [f32], m: &[f32], n: usize, c: usize) {
-    kern::simd(|| {
+kern::simd_fn! {
+    /// acc[j] += Σ_r m[r, j] for a row-major (n, c) matrix.
+    pub(crate) fn col_sum_into<'a>(acc: &'a mut [f32], m: &'a [f32], n: usize, c: usize) {
         for r in 0..n {
             for (a, &v) in acc.iter_mut().zip(&m[r * c..(r + 1) * c]) {
                 *a += v;
             }
         }
-    });
+    }
 }

@@ -45,6 +45,14 @@ pub(crate) struct LstmNode {
     tc: Vec<f32>,
 }
 
+impl Drop for LstmNode {
+    fn drop(&mut self) {
+        crate::pool::recycle(std::mem::take(&mut self.gates));
+        crate::pool::recycle(std::mem::take(&mut self.c));
+        crate::pool::recycle(std::mem::take(&mut self.tc));
+    }
+}
+
 impl<'a> Graph<'a> {
     /// Runs the LSTM in `params` at `s` over `x` (T·B, I) time-major from the state
     /// `h0`, `c0` (B, H). Returns the hidden sequence (T·B, H) and the final cell state
@@ -80,10 +88,10 @@ impl<'a> Graph<'a> {
         );
         assert_eq!(h0v.shape(), (batch, h), "lstm: h0 shape");
         assert_eq!(c0v.shape(), (batch, h), "lstm: c0 shape");
-        let mut out = Tensor::zeros(rows, h);
-        let mut gates = vec![0.0; rows * 4 * h];
-        let mut c = vec![0.0; rows * h];
-        let mut tc = vec![0.0; rows * h];
+        let mut out = Tensor::uninit(rows, h);
+        let mut gates = crate::pool::dirty(rows * 4 * h);
+        let mut c = crate::pool::dirty(rows * h);
+        let mut tc = crate::pool::dirty(rows * h);
         lstm_forward(
             p,
             s,
@@ -100,6 +108,14 @@ impl<'a> Graph<'a> {
         let c_last = Tensor::from_slice(batch, h, &c[(t - 1) * batch * h..]);
         let rg = trainable || self.rg(x) || self.rg(h0) || self.rg(c0);
         let keep = rg && self.grad_enabled();
+        let (gates, c, tc) = if keep {
+            (gates, c, tc)
+        } else {
+            crate::pool::recycle(gates);
+            crate::pool::recycle(c);
+            crate::pool::recycle(tc);
+            (Vec::new(), Vec::new(), Vec::new())
+        };
         let node = LstmNode {
             x,
             h0,
@@ -107,9 +123,9 @@ impl<'a> Graph<'a> {
             set,
             s,
             batch,
-            gates: if keep { gates } else { Vec::new() },
-            c: if keep { c } else { Vec::new() },
-            tc: if keep { tc } else { Vec::new() },
+            gates,
+            c,
+            tc,
         };
         (self.push(out, Op::Lstm(Box::new(node)), rg), c_last)
     }
@@ -160,44 +176,60 @@ pub(crate) fn lstm_forward(
     }
 }
 
-/// Gate nonlinearities and the state update for one step of B rows; activates `z` in place.
-#[inline]
-pub(crate) fn cell_forward(
-    z: &mut [f32],
-    c_prev: &[f32],
-    c: &mut [f32],
-    tc: &mut [f32],
-    hout: &mut [f32],
-    batch: usize,
-    h: usize,
-) {
-    kern::simd(|| {
+kern::simd_fn! {
+    /// Gate nonlinearities and the state update for one step of B rows; activates `z` in
+    /// place.
+    pub(crate) fn cell_forward<'a>(z: &'a mut [f32], c_prev: &'a [f32], c: &'a mut [f32], tc: &'a mut [f32], hout: &'a mut [f32], batch: usize, h: usize) {
         for r in 0..batch {
             let zr = &mut z[r * 4 * h..(r + 1) * 4 * h];
             let (zi, rest) = zr.split_at_mut(h);
             let (zf, rest) = rest.split_at_mut(h);
             let (zg, zo) = rest.split_at_mut(h);
-            let cp = &c_prev[r * h..(r + 1) * h];
-            let cr = &mut c[r * h..(r + 1) * h];
-            let tr = &mut tc[r * h..(r + 1) * h];
-            let hr = &mut hout[r * h..(r + 1) * h];
-            for j in 0..h {
-                let i = kern::sigmoid(zi[j]);
-                let f = kern::sigmoid(zf[j]);
-                let g = kern::tanh(zg[j]);
-                let o = kern::sigmoid(zo[j]);
-                let cn = f * cp[j] + i * g;
-                let t = kern::tanh(cn);
-                zi[j] = i;
-                zf[j] = f;
-                zg[j] = g;
-                zo[j] = o;
-                cr[j] = cn;
-                tr[j] = t;
-                hr[j] = o * t;
-            }
+            let rr = r * h..(r + 1) * h;
+            cell_forward_row(zi, zf, zg, zo, &c_prev[rr.clone()], &mut c[rr.clone()], &mut tc[rr.clone()], &mut hout[rr]);
         }
-    });
+    }
+}
+
+/// One row of [`cell_forward`]. Separate slice arguments carry `noalias`, so the loop
+/// vectorises without runtime overlap checks.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn cell_forward_row(
+    zi: &mut [f32],
+    zf: &mut [f32],
+    zg: &mut [f32],
+    zo: &mut [f32],
+    cp: &[f32],
+    c: &mut [f32],
+    tc: &mut [f32],
+    h: &mut [f32],
+) {
+    let n = zi.len();
+    let (zf, zg, zo, cp, c, tc, h) = (
+        &mut zf[..n],
+        &mut zg[..n],
+        &mut zo[..n],
+        &cp[..n],
+        &mut c[..n],
+        &mut tc[..n],
+        &mut h[..n],
+    );
+    for j in 0..n {
+        let i = kern::sigmoid(zi[j]);
+        let f = kern::sigmoid(zf[j]);
+        let g = kern::tanh(zg[j]);
+        let o = kern::sigmoid(zo[j]);
+        let cn = f * cp[j] + i * g;
+        let t = kern::tanh(cn);
+        zi[j] = i;
+        zf[j] = f;
+        zg[j] = g;
+        zo[j] = o;
+        c[j] = cn;
+        tc[j] = t;
+        h[j] = o * t;
+    }
 }
 
 /// BPTT; see [`Graph::lstm_op`] for the derivatives.
@@ -213,9 +245,9 @@ pub(crate) fn lstm_backward(n: &LstmNode, y: &Tensor, dy: &Tensor, ctx: &mut Bac
     let w_hh = &p[s.w_hh..s.w_hh + g4 * h];
     let (xv, h0v, c0v) = (ctx.val(n.x), ctx.val(n.h0), ctx.val(n.c0));
     let need_h0 = ctx.rg(n.h0);
-    let mut dz = vec![0.0f32; rows * g4];
-    let mut dh_next = vec![0.0f32; bh];
-    let mut dc_next = vec![0.0f32; bh];
+    let mut dz = crate::pool::dirty(rows * g4);
+    let mut dh_next = crate::pool::zeros(bh);
+    let mut dc_next = crate::pool::zeros(bh);
     for t in (0..steps).rev() {
         let c_prev: &[f32] = if t == 0 {
             c0v.data()
@@ -302,44 +334,75 @@ pub(crate) fn lstm_backward(n: &LstmNode, y: &Tensor, dy: &Tensor, ctx: &mut Bac
             true,
         );
     }
+    crate::pool::recycle(dz);
+    crate::pool::recycle(dh_next);
+    crate::pool::recycle(dc_next);
 }
 
-/// One step of the cell's backward for B rows: writes the pre-activation gradient `dz`
-/// (B, 4H) and replaces `dc` (carried c gradient) by its value at t − 1.
-#[allow(clippy::too_many_arguments)]
-#[inline]
-fn cell_backward(
-    gates: &[f32],
-    tc: &[f32],
-    c_prev: &[f32],
-    dy: &[f32],
-    dh_next: &[f32],
-    dc: &mut [f32],
-    dz: &mut [f32],
-    batch: usize,
-    h: usize,
-) {
-    kern::simd(|| {
+kern::simd_fn! {
+    /// One step of the cell's backward for B rows: writes the pre-activation gradient `dz`
+    /// (B, 4H) and replaces `dc` (carried c gradient) by its value at t − 1.
+    fn cell_backward<'a>(gates: &'a [f32], tc: &'a [f32], c_prev: &'a [f32], dy: &'a [f32], dh_next: &'a [f32], dc: &'a mut [f32], dz: &'a mut [f32], batch: usize, h: usize) {
         for r in 0..batch {
             let gr = &gates[r * 4 * h..(r + 1) * 4 * h];
             let zr = &mut dz[r * 4 * h..(r + 1) * 4 * h];
             let (dzi, rest) = zr.split_at_mut(h);
             let (dzf, rest) = rest.split_at_mut(h);
             let (dzg, dzo) = rest.split_at_mut(h);
-            let (gi, gf, gg, go) = (&gr[..h], &gr[h..2 * h], &gr[2 * h..3 * h], &gr[3 * h..]);
-            let o = r * h;
-            for j in 0..h {
-                let (i, f, g, og) = (gi[j], gf[j], gg[j], go[j]);
-                let t = tc[o + j];
-                let dh = dy[o + j] + dh_next[o + j];
-                let d_o = dh * t;
-                let dcc = dc[o + j] + dh * og * (1.0 - t * t);
-                dzi[j] = dcc * g * i * (1.0 - i);
-                dzf[j] = dcc * c_prev[o + j] * f * (1.0 - f);
-                dzg[j] = dcc * i * (1.0 - g * g);
-                dzo[j] = d_o * og * (1.0 - og);
-                dc[o + j] = dcc * f;
-            }
+            let rr = r * h..(r + 1) * h;
+            cell_backward_row(
+                [&gr[..h], &gr[h..2 * h], &gr[2 * h..3 * h], &gr[3 * h..]],
+                &tc[rr.clone()],
+                &c_prev[rr.clone()],
+                &dy[rr.clone()],
+                &dh_next[rr.clone()],
+                &mut dc[rr],
+                dzi,
+                dzf,
+                dzg,
+                dzo,
+            );
         }
-    });
+    }
+}
+
+/// One row of [`cell_backward`] (separate slices so the loop vectorises).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn cell_backward_row(
+    [gi, gf, gg, go]: [&[f32]; 4],
+    tc: &[f32],
+    cp: &[f32],
+    dy: &[f32],
+    dhn: &[f32],
+    dc: &mut [f32],
+    dzi: &mut [f32],
+    dzf: &mut [f32],
+    dzg: &mut [f32],
+    dzo: &mut [f32],
+) {
+    let n = dc.len();
+    let (gi, gf, gg, go, tc, cp, dy, dhn) = (
+        &gi[..n],
+        &gf[..n],
+        &gg[..n],
+        &go[..n],
+        &tc[..n],
+        &cp[..n],
+        &dy[..n],
+        &dhn[..n],
+    );
+    let (dzi, dzf, dzg, dzo) = (&mut dzi[..n], &mut dzf[..n], &mut dzg[..n], &mut dzo[..n]);
+    for j in 0..n {
+        let (i, f, g, og) = (gi[j], gf[j], gg[j], go[j]);
+        let t = tc[j];
+        let dh = dy[j] + dhn[j];
+        let d_o = dh * t;
+        let dcc = dc[j] + dh * og * (1.0 - t * t);
+        dzi[j] = dcc * g * i * (1.0 - i);
+        dzf[j] = dcc * cp[j] * f * (1.0 - f);
+        dzg[j] = dcc * i * (1.0 - g * g);
+        dzo[j] = d_o * og * (1.0 - og);
+        dc[j] = dcc * f;
+    }
 }

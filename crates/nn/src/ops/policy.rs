@@ -35,7 +35,7 @@ impl Graph<'_> {
         );
         let (n, a_dim) = mv.shape();
         let w = a_dim + 1;
-        let mut out = Tensor::zeros(n, w);
+        let mut out = Tensor::uninit(n, w);
         for r in 0..n {
             let (m, s, e) = (mv.row(r), sv.row(r), eps.row(r));
             let o = &mut out.data_mut()[r * w..(r + 1) * w];

@@ -15,7 +15,7 @@ impl Graph<'_> {
             bv.rows()
         );
         let (n, p, q) = (av.rows(), av.cols(), bv.cols());
-        let mut out = Tensor::zeros(n, p + q);
+        let mut out = Tensor::uninit(n, p + q);
         for r in 0..n {
             let o = &mut out.data_mut()[r * (p + q)..(r + 1) * (p + q)];
             o[..p].copy_from_slice(av.row(r));
@@ -34,7 +34,7 @@ impl Graph<'_> {
             xv.cols()
         );
         let n = xv.rows();
-        let mut out = Tensor::zeros(n, len);
+        let mut out = Tensor::uninit(n, len);
         for r in 0..n {
             out.data_mut()[r * len..(r + 1) * len].copy_from_slice(&xv.row(r)[start..start + len]);
         }
