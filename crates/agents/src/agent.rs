@@ -114,7 +114,13 @@ impl Policy {
     }
 
     /// Chooses the action for `obs` into `action` (each entry in [−1, 1]).
-    pub fn act<R: Rng + ?Sized>(&mut self, obs: &[f32], mode: ActMode, rng: &mut R, action: &mut [f32]) {
+    pub fn act<R: Rng + ?Sized>(
+        &mut self,
+        obs: &[f32],
+        mode: ActMode,
+        rng: &mut R,
+        action: &mut [f32],
+    ) {
         self.actor.step(obs, &mut self.state);
         match (mode, self.algo) {
             (ActMode::Deterministic, _) => self.state.deterministic_action(action),
@@ -170,7 +176,11 @@ fn smooth(a: &mut Tensor, cfg: &RlConfig, rng: &mut ChaCha8Rng) {
 
 /// Rows `[t0·B, t1·B)` of a time-major `(W·B, cols)` array as a tensor.
 fn steps(data: &[f32], batch: usize, cols: usize, t0: usize, t1: usize) -> Tensor {
-    Tensor::from_slice((t1 - t0) * batch, cols, &data[t0 * batch * cols..t1 * batch * cols])
+    Tensor::from_slice(
+        (t1 - t0) * batch,
+        cols,
+        &data[t0 * batch * cols..t1 * batch * cols],
+    )
 }
 
 impl Agent {
@@ -184,10 +194,22 @@ impl Agent {
         cfg: &RlConfig,
         seed: u64,
     ) -> Result<Self, AgentError> {
-        let actor = Actor::new(obs_dim, act_dim, &nets.actor, seed.wrapping_mul(31).wrapping_add(1))?;
+        let actor = Actor::new(
+            obs_dim,
+            act_dim,
+            &nets.actor,
+            seed.wrapping_mul(31).wrapping_add(1),
+        )?;
         let n_critics = if algo == Algo::Ddpg { 1 } else { 2 };
         let critics = (0..n_critics)
-            .map(|k| Critic::new(obs_dim, act_dim, &nets.critic, seed.wrapping_mul(31).wrapping_add(2 + k as u64)))
+            .map(|k| {
+                Critic::new(
+                    obs_dim,
+                    act_dim,
+                    &nets.critic,
+                    seed.wrapping_mul(31).wrapping_add(2 + k as u64),
+                )
+            })
             .collect::<Result<Vec<_>, _>>()?;
         let adam = |lr: f64| AdamConfig {
             lr: lr as f32,
@@ -277,7 +299,11 @@ impl Agent {
 
     /// A rollout policy from the current actor.
     pub fn policy(&self) -> Policy {
-        Policy::new(self.actor.clone(), self.algo, self.cfg.exploration_noise as f32)
+        Policy::new(
+            self.actor.clone(),
+            self.algo,
+            self.cfg.exploration_noise as f32,
+        )
     }
 
     /// Length of the ES genome: the actor's weights and biases (both heads), plus log α for SAC.
@@ -366,7 +392,10 @@ impl Agent {
         let not_done = Tensor::from_vec(
             len * b,
             1,
-            batch.terminated[burn * b..].iter().map(|d| 1.0 - d).collect(),
+            batch.terminated[burn * b..]
+                .iter()
+                .map(|d| 1.0 - d)
+                .collect(),
         );
 
         let st = self.burn_in(batch);
@@ -379,7 +408,12 @@ impl Agent {
                 Algo::Sac => {
                     let out = self.actor.forward(&mut g, o2, b, st.actor_next.as_ref());
                     let s = self.actor.sample(&mut g, &out, &mut self.rng);
-                    let ent = g.value(s.log_prob).data().iter().map(|lp| -alpha * lp).collect();
+                    let ent = g
+                        .value(s.log_prob)
+                        .data()
+                        .iter()
+                        .map(|lp| -alpha * lp)
+                        .collect();
                     (g.value(s.action).clone(), Some(ent))
                 }
                 _ => {
@@ -396,7 +430,9 @@ impl Agent {
             let a2v = g.constant(a2);
             let mut qmin: Option<Vec<f32>> = None;
             for (k, c) in self.critic_targets.iter().enumerate() {
-                let q = c.forward(&mut g, o2, a2v, b, st.critic_targets[k].as_ref()).q;
+                let q = c
+                    .forward(&mut g, o2, a2v, b, st.critic_targets[k].as_ref())
+                    .q;
                 let q = g.value(q).data().to_vec();
                 qmin = Some(match qmin {
                     None => q,
@@ -415,7 +451,12 @@ impl Agent {
         // Critic loss (eq. 4), masked mean, gradients into every critic.
         let (mut grads, critic_loss, q_mean) = {
             let mut g = Graph::new();
-            let (ov, av, yv, mv) = (g.constant(obs.clone()), g.constant(act), g.constant(y), g.constant(mask.clone()));
+            let (ov, av, yv, mv) = (
+                g.constant(obs.clone()),
+                g.constant(act),
+                g.constant(y),
+                g.constant(mask.clone()),
+            );
             let mut total = None;
             let mut q_mean = 0.0;
             for (k, c) in self.critics.iter().enumerate() {
@@ -439,7 +480,10 @@ impl Agent {
             (g.backward(loss), lv, q_mean)
         };
         if !critic_loss.is_finite() {
-            return Err(AgentError::NonFinite { what: "critic loss", update: self.updates });
+            return Err(AgentError::NonFinite {
+                what: "critic loss",
+                update: self.updates,
+            });
         }
         for (c, opt) in self.critics.iter_mut().zip(&mut self.opt_critics) {
             opt.apply(c.params_mut(), &mut grads)?;
@@ -485,7 +529,11 @@ impl Agent {
                 }
                 _ => (self.actor.deterministic(&mut g, &out), None),
             };
-            let critics = if self.algo == Algo::Sac { self.critics.len() } else { 1 };
+            let critics = if self.algo == Algo::Sac {
+                self.critics.len()
+            } else {
+                1
+            };
             let mut qmin = None;
             for (k, c) in self.critics.iter().take(critics).enumerate() {
                 let q = c.forward(&mut g, ov, act, batch, st.critics[k].as_ref()).q;
@@ -510,14 +558,23 @@ impl Agent {
             (g.backward(loss), lv, lp_values)
         };
         if !loss.is_finite() {
-            return Err(AgentError::NonFinite { what: "actor loss", update: self.updates });
+            return Err(AgentError::NonFinite {
+                what: "actor loss",
+                update: self.updates,
+            });
         }
         self.opt_actor.apply(self.actor.params_mut(), &mut grads)?;
 
         if let (Some(lp), true) = (log_prob, self.cfg.learn_alpha) {
             // L(log α) = −mean(log α · (log π + H̄)) ⇒ ∂L/∂log α = −mean(log π + H̄).
             let target = self.cfg.target_entropy.unwrap_or(-(self.act_dim as f64)) as f32;
-            let mean_lp: f32 = lp.data().iter().zip(mask.data()).map(|(l, m)| l * m).sum::<f32>() * norm;
+            let mean_lp: f32 = lp
+                .data()
+                .iter()
+                .zip(mask.data())
+                .map(|(l, m)| l * m)
+                .sum::<f32>()
+                * norm;
             let mut grad = [-(mean_lp + target)];
             if grad[0].is_finite() {
                 self.opt_alpha.step(&mut self.log_alpha, &mut grad)?;
@@ -548,7 +605,11 @@ impl Agent {
             actor: self.actor.zero_state(b),
             actor_next: self.actor.zero_state(b),
             critics: self.critics.iter().map(|c| c.zero_state(b)).collect(),
-            critic_targets: self.critic_targets.iter().map(|c| c.zero_state(b)).collect(),
+            critic_targets: self
+                .critic_targets
+                .iter()
+                .map(|c| c.zero_state(b))
+                .collect(),
         };
         let recurrent = st.actor.is_some() || st.critics.iter().any(Option::is_some);
         if !recurrent {
@@ -585,7 +646,9 @@ impl Agent {
                 _ => next_actor.deterministic(&mut g, &out),
             };
             for (k, c) in self.critic_targets.iter().enumerate() {
-                st.critic_targets[k] = c.forward(&mut g, o2, a2, b, st.critic_targets[k].as_ref()).state;
+                st.critic_targets[k] = c
+                    .forward(&mut g, o2, a2, b, st.critic_targets[k].as_ref())
+                    .state;
             }
         }
         st
@@ -618,18 +681,26 @@ impl Agent {
     }
 
     /// Restores what [`Agent::state_tensors`] produced (same architecture required).
-    pub fn load_state_tensors(&mut self, tensors: &std::collections::HashMap<String, Vec<f32>>) -> Result<(), AgentError> {
+    pub fn load_state_tensors(
+        &mut self,
+        tensors: &std::collections::HashMap<String, Vec<f32>>,
+    ) -> Result<(), AgentError> {
         let get = |name: &str| -> Result<&Vec<f32>, AgentError> {
-            tensors.get(name).ok_or_else(|| AgentError::Nn(NnError::Config {
-                field: name.into(),
-                value: "missing".into(),
-                reason: "the checkpoint lacks this tensor".into(),
-            }))
+            tensors.get(name).ok_or_else(|| {
+                AgentError::Nn(NnError::Config {
+                    field: name.into(),
+                    value: "missing".into(),
+                    reason: "the checkpoint lacks this tensor".into(),
+                })
+            })
         };
         let load = |name: &str, p: &mut Params, opt: Option<&mut Adam>| -> Result<(), AgentError> {
             p.set_flat(get(name)?)?;
             if let Some(opt) = opt {
-                let t = get(&format!("{name}.adam_t"))?.first().copied().unwrap_or(0.0) as u64;
+                let t = get(&format!("{name}.adam_t"))?
+                    .first()
+                    .copied()
+                    .unwrap_or(0.0) as u64;
                 opt.set_state(esrl_nn::AdamState {
                     t,
                     m: get(&format!("{name}.adam_m"))?.clone(),
@@ -642,7 +713,12 @@ impl Agent {
         if let Some(t) = &mut self.actor_target {
             load("actor_target", t.params_mut(), None)?;
         }
-        for (k, (c, opt)) in self.critics.iter_mut().zip(&mut self.opt_critics).enumerate() {
+        for (k, (c, opt)) in self
+            .critics
+            .iter_mut()
+            .zip(&mut self.opt_critics)
+            .enumerate()
+        {
             load(&format!("critic{}", k + 1), c.params_mut(), Some(opt))?;
         }
         for (k, c) in self.critic_targets.iter_mut().enumerate() {

@@ -8,7 +8,8 @@ use rand::Rng;
 /// Mixes a run seed with two indices into an independent 64-bit seed (SplitMix64 finaliser):
 /// every episode, individual and stream gets its own, whatever thread runs it.
 pub fn mix_seed(seed: u64, a: u64, b: u64) -> u64 {
-    let mut z = seed ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xD1B5_4A32_D192_ED03);
+    let mut z =
+        seed ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xD1B5_4A32_D192_ED03);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
@@ -97,7 +98,9 @@ pub fn rollout<R: Rng + ?Sized>(
     let mut action = vec![0.0f32; a];
     loop {
         match &mut actor {
-            Actor::Random => action.iter_mut().for_each(|x| *x = rng.random_range(-1.0..=1.0)),
+            Actor::Random => action
+                .iter_mut()
+                .for_each(|x| *x = rng.random_range(-1.0..=1.0)),
             Actor::Policy(p, mode) => p.act(&obs, *mode, rng, &mut action),
         }
         let step = env.step(&action);

@@ -114,12 +114,21 @@ impl Trainer {
 
     fn recurrent(&self) -> bool {
         self.agent.actor().lstm_hidden().is_some()
-            || self.agent.critics().iter().any(|c| c.lstm_hidden().is_some())
+            || self
+                .agent
+                .critics()
+                .iter()
+                .any(|c| c.lstm_hidden().is_some())
     }
 
     /// One gradient update on a fresh batch.
     pub fn update(&mut self) -> Result<UpdateStats, AgentError> {
-        let batch = sample_batch(&self.buffer, self.agent.config(), self.recurrent(), &mut self.rng);
+        let batch = sample_batch(
+            &self.buffer,
+            self.agent.config(),
+            self.recurrent(),
+            &mut self.rng,
+        );
         self.agent.update(&batch)
     }
 
@@ -138,7 +147,9 @@ impl Trainer {
         length = 0;
         loop {
             if self.env_steps < cfg.warm_start as u64 {
-                action.iter_mut().for_each(|x| *x = self.rng.random_range(-1.0..=1.0));
+                action
+                    .iter_mut()
+                    .for_each(|x| *x = self.rng.random_range(-1.0..=1.0));
             } else {
                 policy.act(&obs, ActMode::Explore, &mut self.rng, &mut action);
             }

@@ -17,7 +17,10 @@ fn train(algo: Algo, nets: &NetConfig, cfg: &RlConfig, seed: u64, episodes: usiz
         let r = trainer.episode(&mut env).unwrap();
         returns.push(r.ret);
     }
-    eprintln!("{algo:?} returns: {:?}", returns.iter().map(|r| r.round()).collect::<Vec<_>>());
+    eprintln!(
+        "{algo:?} returns: {:?}",
+        returns.iter().map(|r| r.round()).collect::<Vec<_>>()
+    );
     let tail = &returns[returns.len() - 10..];
     tail.iter().sum::<f64>() / tail.len() as f64
 }
@@ -88,5 +91,8 @@ fn sac_recurrent_learns_pendulum() {
         ..RlConfig::default()
     };
     let score = train(Algo::Sac, &nets, &cfg, 1, 100);
-    assert!(score >= -400.0, "recurrent SAC last-10 mean {score:.1} < -400");
+    assert!(
+        score >= -400.0,
+        "recurrent SAC last-10 mean {score:.1} < -400"
+    );
 }

@@ -1,1 +1,9 @@
-//! The esrl library behind the `esrl` command: configs, run folders, training drivers.
+//! The esrl library behind the `esrl` command: configs, run folders, checkpoints and the
+//! training, evaluation, comparison, recording and benchmark drivers.
+
+pub mod args;
+pub mod bench;
+pub mod checkpoint;
+pub mod config;
+pub mod run_dir;
+pub mod train;

@@ -1,5 +1,23 @@
 //! `esrl`: train, evaluate, compare and record humanoid walking controllers.
 
-fn main() {
-    println!("esrl");
+use clap::Parser;
+use esrl::args::{Cli, Command};
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Train(args) => esrl::train::run(args).map(|_| ()),
+        Command::Bench(args) => esrl::bench::run(&args.what),
+        Command::Eval(_) | Command::Compare(_) | Command::Record(_) => {
+            Err(anyhow::anyhow!("this command is not available yet"))
+        }
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
 }

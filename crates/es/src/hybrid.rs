@@ -108,7 +108,14 @@ impl Hybrid {
         while self.trainer.env_steps < target {
             let seed = mix_seed(self.trainer.seed, 3, self.trainer.env_steps);
             let left = (target - self.trainer.env_steps) as usize;
-            let ep = rollout(env, Acting::Random, seed, Some(left), &mut self.trainer.rng, |_| {});
+            let ep = rollout(
+                env,
+                Acting::Random,
+                seed,
+                Some(left),
+                &mut self.trainer.rng,
+                |_| {},
+            );
             ep.push_into(&mut self.trainer.buffer);
             self.trainer.env_steps += ep.len() as u64;
             taken += ep.len() as u64;

@@ -65,7 +65,13 @@ pub struct ConfigError {
 impl EsConfig {
     /// Checks every field, returning the first that cannot work.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let err = |field, value: String, reason| Err(ConfigError { field, value, reason });
+        let err = |field, value: String, reason| {
+            Err(ConfigError {
+                field,
+                value,
+                reason,
+            })
+        };
         if self.population < 2 {
             return err(
                 "population",
@@ -84,10 +90,18 @@ impl EsConfig {
             return err("sigma", self.sigma.to_string(), "must be finite and ≥ 0");
         }
         if !(self.sigma_min.is_finite() && self.sigma_min >= 0.0) {
-            return err("sigma_min", self.sigma_min.to_string(), "must be finite and ≥ 0");
+            return err(
+                "sigma_min",
+                self.sigma_min.to_string(),
+                "must be finite and ≥ 0",
+            );
         }
         if !(self.sigma_decay >= 0.0 && self.sigma_decay <= 1.0) {
-            return err("sigma_decay", self.sigma_decay.to_string(), "must be in [0, 1]");
+            return err(
+                "sigma_decay",
+                self.sigma_decay.to_string(),
+                "must be in [0, 1]",
+            );
         }
         if self.evaluations == 0 {
             return err("evaluations", "0".into(), "needs at least one rollout");
@@ -149,8 +163,7 @@ impl Strategy {
 
     /// Individual `index` of the current generation (eq. 8): θ + σ ε with ε from its own stream.
     pub fn perturbation(&self, index: usize) -> Vec<f32> {
-        let mut rng =
-            ChaCha8Rng::seed_from_u64(mix_seed(self.seed, self.generation, index as u64));
+        let mut rng = ChaCha8Rng::seed_from_u64(mix_seed(self.seed, self.generation, index as u64));
         let sigma = self.sigma as f32;
         self.mean
             .iter()
@@ -163,8 +176,17 @@ impl Strategy {
 
     /// Eqs. 10 and 11: recombines the elites of `individuals` ranked by `fitness`, decays σ and
     /// advances the generation. Returns the ranking used, best first.
-    pub fn update(&mut self, individuals: &[&[f32]], fitness: &[f64], cfg: &EsConfig) -> Vec<usize> {
-        assert_eq!(individuals.len(), fitness.len(), "one fitness per individual");
+    pub fn update(
+        &mut self,
+        individuals: &[&[f32]],
+        fitness: &[f64],
+        cfg: &EsConfig,
+    ) -> Vec<usize> {
+        assert_eq!(
+            individuals.len(),
+            fitness.len(),
+            "one fitness per individual"
+        );
         let order = rank(fitness);
         let n_elite = cfg.elites().min(order.len());
         let weights = elite_weights(n_elite);

@@ -1,0 +1,212 @@
+//! Checkpoints: everything needed to continue a run exactly, written atomically.
+//!
+//! ```text
+//! RUN/checkpoint/
+//!   agent.safetensors   actor, critics, targets, Adam moments, log α (and the ES mean)
+//!   actor.safetensors   the actor alone, tensor names of esrl-nn (loads in PyTorch/NumPy)
+//!   replay.safetensors  the replay buffer, oldest transition first
+//!   state.json          counters, random streams, σ, the learning curve so far
+//! ```
+//!
+//! A checkpoint is written to `checkpoint.tmp/`, then swapped in with two renames; a kill at
+//! any moment leaves `checkpoint/` or `checkpoint.old/` complete, and loading falls back to the
+//! latter.
+
+use anyhow::{bail, Context, Result};
+use esrl_agents::{Agent, ReplayBuffer, Trainer};
+use esrl_es::Hybrid;
+use esrl_nn::{load_tensors, save_params, save_tensors, Module, NamedTensor};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::fs;
+use std::path::{Path, PathBuf};
+
+/// Counters and random streams of a checkpoint (`state.json`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CheckpointState {
+    /// Format version.
+    pub version: u32,
+    /// Metric rows covered (rows past this are dropped on resume).
+    pub rows: usize,
+    /// Episodes (plain) completed.
+    pub episodes: usize,
+    /// Generations (hybrid) completed.
+    pub generations: usize,
+    /// Environment steps taken.
+    pub env_steps: u64,
+    /// The trainer's random stream.
+    pub trainer_rng: ChaCha8Rng,
+    /// Gradient updates done.
+    pub agent_updates: u64,
+    /// The agent's random stream.
+    pub agent_rng: ChaCha8Rng,
+    /// Whether the replay buffer's last episode is still open.
+    pub episode_open: bool,
+    /// ES σ (hybrid).
+    pub sigma: Option<f64>,
+    /// ES generation counter (hybrid).
+    pub es_generation: Option<u64>,
+    /// Wall-clock seconds of training so far.
+    pub wall_s: f64,
+    /// The learning curve so far.
+    pub curve: Vec<f64>,
+    /// Q₀ per row so far.
+    pub q0: Vec<f64>,
+}
+
+/// The training state a checkpoint holds: a plain trainer or a hybrid one.
+pub enum Learner {
+    /// SAC / TD3 / DDPG.
+    Plain(Trainer),
+    /// ES-SAC / ES-TD3 / ES-DDPG.
+    Hybrid(Box<Hybrid>),
+}
+
+impl Learner {
+    /// The RL trainer inside.
+    pub fn trainer(&self) -> &Trainer {
+        match self {
+            Learner::Plain(t) => t,
+            Learner::Hybrid(h) => &h.trainer,
+        }
+    }
+
+    /// The RL trainer inside, mutable.
+    pub fn trainer_mut(&mut self) -> &mut Trainer {
+        match self {
+            Learner::Plain(t) => t,
+            Learner::Hybrid(h) => &mut h.trainer,
+        }
+    }
+}
+
+/// Where the newest complete checkpoint of a run folder is, if any.
+pub fn find(run: &Path) -> Option<PathBuf> {
+    ["checkpoint", "checkpoint.old"]
+        .iter()
+        .map(|d| run.join(d))
+        .find(|d| d.join("state.json").exists() && d.join("agent.safetensors").exists())
+}
+
+/// Writes a checkpoint of `learner` into `run/checkpoint/` atomically.
+pub fn save(run: &Path, learner: &Learner, state: &CheckpointState) -> Result<()> {
+    let tmp = run.join("checkpoint.tmp");
+    if tmp.exists() {
+        fs::remove_dir_all(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
+    }
+    fs::create_dir_all(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+    let trainer = learner.trainer();
+    let mut tensors: Vec<NamedTensor> = trainer
+        .agent
+        .state_tensors()
+        .into_iter()
+        .map(|(name, data)| NamedTensor {
+            shape: vec![data.len()],
+            name,
+            data,
+        })
+        .collect();
+    if let Learner::Hybrid(h) = learner {
+        tensors.push(NamedTensor {
+            name: "es.mean".into(),
+            shape: vec![h.strategy.mean.len()],
+            data: h.strategy.mean.clone(),
+        });
+    }
+    save_tensors(&tmp.join("agent.safetensors"), &tensors, None)?;
+    save_params(
+        &tmp.join("actor.safetensors"),
+        &[("", trainer.agent.actor().params())],
+    )?;
+    trainer.buffer.save(&tmp.join("replay.safetensors"))?;
+    crate::run_dir::write_json_atomic(&tmp.join("state.json"), state)?;
+    let current = run.join("checkpoint");
+    let old = run.join("checkpoint.old");
+    if old.exists() {
+        fs::remove_dir_all(&old).with_context(|| format!("removing {}", old.display()))?;
+    }
+    if current.exists() {
+        fs::rename(&current, &old).with_context(|| format!("moving {}", current.display()))?;
+    }
+    fs::rename(&tmp, &current).with_context(|| format!("moving {}", tmp.display()))?;
+    if old.exists() {
+        fs::remove_dir_all(&old).ok();
+    }
+    Ok(())
+}
+
+/// Reads `state.json` of a checkpoint folder.
+pub fn load_state(dir: &Path) -> Result<CheckpointState> {
+    let p = dir.join("state.json");
+    let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+    let state: CheckpointState =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
+    if state.version != 1 {
+        bail!(
+            "{}: unsupported checkpoint version {}",
+            p.display(),
+            state.version
+        );
+    }
+    Ok(state)
+}
+
+/// Loads the agent tensors of a checkpoint folder into `agent` (same architecture).
+pub fn load_agent(dir: &Path, agent: &mut Agent) -> Result<HashMap<String, Vec<f32>>> {
+    let p = dir.join("agent.safetensors");
+    let tensors: HashMap<String, Vec<f32>> = load_tensors(&p)
+        .with_context(|| format!("reading {}", p.display()))?
+        .into_iter()
+        .map(|(k, t)| (k, t.data))
+        .collect();
+    agent.load_state_tensors(&tensors).with_context(|| {
+        format!(
+            "loading {} (does config.toml match the checkpoint?)",
+            p.display()
+        )
+    })?;
+    Ok(tensors)
+}
+
+/// Restores `learner` (built fresh from the run's config) from a checkpoint folder.
+pub fn restore(dir: &Path, learner: &mut Learner, state: &CheckpointState) -> Result<()> {
+    let tensors = {
+        let trainer = learner.trainer_mut();
+        load_agent(dir, &mut trainer.agent)?
+    };
+    let trainer = learner.trainer_mut();
+    trainer
+        .agent
+        .set_counters(state.agent_updates, state.agent_rng.clone());
+    trainer.rng = state.trainer_rng.clone();
+    trainer.env_steps = state.env_steps;
+    trainer.episodes = state.episodes;
+    let cfg = trainer.agent.config().clone();
+    trainer.buffer = ReplayBuffer::load(
+        &dir.join("replay.safetensors"),
+        trainer.agent.obs_dim(),
+        trainer.agent.act_dim(),
+        cfg.buffer_size,
+        state.episode_open,
+    )
+    .with_context(|| format!("loading the replay buffer of {}", dir.display()))?;
+    if let Learner::Hybrid(h) = learner {
+        let mean = tensors
+            .get("es.mean")
+            .with_context(|| format!("{}: no es.mean tensor", dir.display()))?;
+        if mean.len() != h.strategy.mean.len() {
+            bail!(
+                "{}: es.mean has {} values, expected {}",
+                dir.display(),
+                mean.len(),
+                h.strategy.mean.len()
+            );
+        }
+        h.strategy.mean = mean.clone();
+        h.strategy.sigma = state.sigma.unwrap_or(h.strategy.sigma);
+        h.strategy.generation = state.es_generation.unwrap_or(0);
+        h.generation = state.generations;
+    }
+    Ok(())
+}

@@ -1,0 +1,204 @@
+//! The resolved training configuration: preset, then a TOML file, then command-line flags.
+//!
+//! The run folder's `config.toml` is this struct serialised, so a run can be repeated with
+//! `esrl train <agent> --config RUN/config.toml`. Unknown keys are refused with their name.
+
+use crate::args::{AgentKind, EnvKind, Preset, TrainOptions};
+use anyhow::{bail, Context, Result};
+use esrl_agents::{LearnEvery, NetConfig, RlConfig};
+use esrl_es::EsConfig;
+use esrl_sim::WalkConfig;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Everything a training run depends on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainConfig {
+    /// The agent (`es-sac`, `es-td3`, `es-ddpg`, `sac`, `td3`, `ddpg`).
+    pub agent: AgentKind,
+    /// The environment (`walk` or `pendulum`).
+    pub env: EnvKind,
+    /// The preset the run started from (for the record; the values below are what counts).
+    pub preset: Preset,
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Rollout threads; 0 means one per core. Results do not depend on it.
+    pub threads: usize,
+    /// ES generations (hybrid agents). Paper: 1500.
+    pub generations: usize,
+    /// Training episodes (plain agents). Paper: 1500.
+    pub episodes: usize,
+    /// Optional environment-step budget that ends training early (any agent).
+    pub max_env_steps: Option<u64>,
+    /// Gradient updates per ES generation (the inner training cycles). Paper: 50.
+    pub inner_cycles: usize,
+    /// Write a checkpoint every this many generations/episodes (and at the end).
+    pub checkpoint_every: usize,
+    /// The walking environment.
+    pub walk: WalkConfig,
+    /// Actor and critic networks.
+    pub network: NetConfig,
+    /// SAC/TD3/DDPG hyperparameters.
+    pub rl: RlConfig,
+    /// Evolution strategy (hybrid agents).
+    pub es: EsConfig,
+}
+
+impl TrainConfig {
+    /// The settings of `preset` for `agent` on `env`.
+    pub fn preset(agent: AgentKind, env: EnvKind, preset: Preset) -> Self {
+        let mut c = Self {
+            agent,
+            env,
+            preset,
+            seed: 0,
+            threads: 0,
+            generations: 1500,
+            episodes: 1500,
+            max_env_steps: None,
+            inner_cycles: 50,
+            checkpoint_every: 10,
+            walk: WalkConfig::default(),
+            network: NetConfig::default(),
+            rl: RlConfig::default(),
+            es: EsConfig::default(),
+        };
+        if env == EnvKind::Walk && !agent.is_hybrid() {
+            // MATLAB's agents learn at the end of each episode, up to 100 minibatches
+            // (`LearningFrequency = -1`, `MaxMiniBatchPerEpoch = 100`).
+            c.rl.learn_every = LearnEvery::Episode;
+            c.rl.updates_per_learn = 100;
+        }
+        if env == EnvKind::Pendulum {
+            // Pendulum-v1 is Markovian: the feed-forward networks, updated every step.
+            c.network = NetConfig::feed_forward();
+            c.episodes = 100;
+            c.generations = 20;
+            c.es.population = 10;
+            c.es.sigma = 0.05;
+        }
+        match preset {
+            Preset::Paper => {}
+            Preset::Quick => {
+                c.generations = 150;
+                c.episodes = 300;
+                c.es.population = 10;
+                c.es.sigma = 0.05;
+                c.inner_cycles = 25;
+                c.rl.batch_size = 64;
+                c.rl.buffer_size = 300_000;
+                c.checkpoint_every = 5;
+            }
+            Preset::Smoke => {
+                c.generations = 2;
+                c.episodes = 2;
+                c.inner_cycles = 2;
+                c.es.population = 3;
+                c.rl.batch_size = 4;
+                c.rl.warm_start = 50;
+                c.rl.buffer_size = 10_000;
+                c.rl.updates_per_learn = c.rl.updates_per_learn.min(2);
+                c.network = NetConfig::tiny(c.network.recurrent());
+                c.walk.episode_seconds = 1.0;
+                c.checkpoint_every = 1;
+            }
+        }
+        c
+    }
+
+    /// Resolves preset, file and flags, in that order, and validates the result.
+    pub fn resolve(agent: AgentKind, opts: &TrainOptions, seed: Option<u64>) -> Result<Self> {
+        let env = opts.env.unwrap_or(EnvKind::Walk);
+        let mut cfg = Self::preset(agent, env, opts.preset);
+        if let Some(path) = &opts.config {
+            cfg = cfg.merged_with_file(path)?;
+            cfg.agent = agent;
+            if let Some(env) = opts.env {
+                cfg.env = env;
+            }
+        }
+        if let Some(s) = seed {
+            cfg.seed = s;
+        }
+        if let Some(t) = opts.threads {
+            cfg.threads = t;
+        }
+        if let Some(g) = opts.generations {
+            cfg.generations = g;
+        }
+        if let Some(e) = opts.episodes {
+            cfg.episodes = e;
+        }
+        if let Some(s) = opts.steps {
+            cfg.max_env_steps = Some(s);
+        }
+        if let Some(u) = &opts.urdf {
+            cfg.walk.urdf = Some(u.clone());
+        }
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    /// This config with the keys of a TOML file laid over it. Unknown keys are errors.
+    pub fn merged_with_file(&self, path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("reading config file {}", path.display()))?;
+        self.merged_with_str(&text)
+            .with_context(|| format!("in config file {}", path.display()))
+    }
+
+    /// This config with the keys of a TOML text laid over it.
+    pub fn merged_with_str(&self, text: &str) -> Result<Self> {
+        let overlay: toml::Table = toml::from_str(text)?;
+        let mut base = toml::Table::try_from(self)?;
+        merge(&mut base, overlay);
+        let merged: Self = toml::Value::Table(base).try_into()?;
+        Ok(merged)
+    }
+
+    /// Reads a run folder's `config.toml` as it was written (no preset underneath).
+    pub fn load(path: &Path) -> Result<Self> {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let cfg: Self =
+            toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+        cfg.validate()?;
+        Ok(cfg)
+    }
+
+    /// The TOML text written to `config.toml`.
+    pub fn to_toml(&self) -> Result<String> {
+        Ok(toml::to_string_pretty(self)?)
+    }
+
+    /// Checks every field, naming the first that cannot work.
+    pub fn validate(&self) -> Result<()> {
+        if self.agent.is_hybrid() && self.generations == 0 {
+            bail!("generations = 0: needs at least one generation");
+        }
+        if !self.agent.is_hybrid() && self.episodes == 0 {
+            bail!("episodes = 0: needs at least one episode");
+        }
+        if self.checkpoint_every == 0 {
+            bail!("checkpoint_every = 0: must be ≥ 1");
+        }
+        self.rl.validate()?;
+        self.es.validate()?;
+        self.network.validate()?;
+        self.walk.validate()?;
+        Ok(())
+    }
+}
+
+/// Lays `over` onto `base`, recursing into tables so a file can set one nested key.
+fn merge(base: &mut toml::Table, over: toml::Table) {
+    for (k, v) in over {
+        match (base.get_mut(&k), v) {
+            (Some(toml::Value::Table(b)), toml::Value::Table(o)) => merge(b, o),
+            (_, v) => {
+                base.insert(k, v);
+            }
+        }
+    }
+}

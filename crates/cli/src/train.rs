@@ -1,0 +1,451 @@
+//! `esrl train`: builds the learner from the resolved config, runs it with a progress bar,
+//! writes metrics row by row, checkpoints, and resumes.
+
+use crate::args::{AgentKind, EnvKind, TrainArgs};
+use crate::checkpoint::{self, CheckpointState, Learner};
+use crate::config::TrainConfig;
+use crate::run_dir::RunDir;
+use anyhow::{bail, Context, Result};
+use esrl_agents::{Agent, AgentError, Algo, Trainer};
+use esrl_es::Hybrid;
+use esrl_metrics::CurveSummary;
+use esrl_sim::{Env, Pendulum, RobotModel, WalkEnv};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde::Serialize;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Builds one environment per call; shared by pool threads.
+pub type EnvFactory = Arc<dyn Fn() -> Box<dyn Env> + Send + Sync>;
+
+/// The environment factory of a config. Builds (and so validates) one environment up front,
+/// so the factory itself cannot fail later.
+pub fn env_factory(cfg: &TrainConfig) -> Result<EnvFactory> {
+    match cfg.env {
+        EnvKind::Pendulum => Ok(Arc::new(|| Box::new(Pendulum::new()) as Box<dyn Env>)),
+        EnvKind::Walk => {
+            let model = match &cfg.walk.urdf {
+                Some(path) => Arc::new(
+                    RobotModel::from_urdf_path(path)
+                        .with_context(|| format!("loading URDF {}", path.display()))?,
+                ),
+                None => RobotModel::humanoid_shared().context("loading the embedded humanoid")?,
+            };
+            let walk = cfg.walk.clone();
+            WalkEnv::from_model(model.clone(), walk.clone())
+                .context("building the walking environment")?;
+            Ok(Arc::new(move || {
+                Box::new(
+                    WalkEnv::from_model(model.clone(), walk.clone())
+                        .expect("the same model and config built an environment before"),
+                ) as Box<dyn Env>
+            }))
+        }
+    }
+}
+
+/// The RL algorithm behind an agent kind.
+pub fn algo_of(agent: AgentKind) -> Algo {
+    match agent {
+        AgentKind::EsSac | AgentKind::Sac => Algo::Sac,
+        AgentKind::EsTd3 | AgentKind::Td3 => Algo::Td3,
+        AgentKind::EsDdpg | AgentKind::Ddpg => Algo::Ddpg,
+    }
+}
+
+/// A fresh learner for a config.
+pub fn build_learner(cfg: &TrainConfig, make_env: &EnvFactory) -> Result<Learner> {
+    let env = make_env();
+    let agent = Agent::new(
+        algo_of(cfg.agent),
+        env.obs_dim(),
+        env.act_dim(),
+        &cfg.network,
+        &cfg.rl,
+        cfg.seed,
+    )?;
+    Ok(if cfg.agent.is_hybrid() {
+        Learner::Hybrid(Box::new(Hybrid::new(
+            agent,
+            cfg.es.clone(),
+            cfg.inner_cycles,
+            cfg.seed,
+        )))
+    } else {
+        Learner::Plain(Trainer::new(agent, cfg.seed))
+    })
+}
+
+/// A plain agent's metrics row.
+#[derive(Debug, Serialize)]
+struct EpisodeRow {
+    episode: usize,
+    env_steps: u64,
+    curve: f64,
+    #[serde(rename = "return")]
+    ret: f64,
+    length: usize,
+    terminated: bool,
+    q0: f64,
+    critic_loss: Option<f64>,
+    actor_loss: Option<f64>,
+    alpha: Option<f64>,
+    updates: u64,
+    wall_s: f64,
+}
+
+/// `summary.json`: the curve metrics of SPEC §6 plus what the run did.
+#[derive(Debug, Serialize)]
+pub struct Summary {
+    /// Agent name.
+    pub agent: String,
+    /// Environment.
+    pub env: EnvKind,
+    /// Run seed.
+    pub seed: u64,
+    /// Curve metrics (AUC, nAUC, Final-50, Best-Win-50, Episodes-to-Target).
+    #[serde(flatten)]
+    pub curve: CurveSummary,
+    /// Mean Q₀ over the curve.
+    pub q0_mean: Option<f64>,
+    /// Generations or episodes done.
+    pub length: usize,
+    /// Environment steps taken.
+    pub env_steps: u64,
+    /// Best curve value.
+    pub best: f64,
+    /// Wall-clock seconds of training.
+    pub wall_s: f64,
+    /// Whether the configured budget was completed.
+    pub finished: bool,
+}
+
+/// Where a run goes by default.
+pub fn default_out(cfg: &TrainConfig) -> PathBuf {
+    let env = match cfg.env {
+        EnvKind::Walk => "walk",
+        EnvKind::Pendulum => "pendulum",
+    };
+    PathBuf::from("runs").join(format!("{}-{env}-s{}", cfg.agent.name(), cfg.seed))
+}
+
+/// Runs `esrl train`.
+pub fn run(args: &TrainArgs) -> Result<PathBuf> {
+    let (cfg, root, resume) = match &args.resume {
+        Some(dir) => {
+            let cfg = TrainConfig::load(&dir.join(RunDir::CONFIG))?;
+            if cfg.agent != args.agent {
+                bail!(
+                    "{} is a {} run, not {}",
+                    dir.display(),
+                    cfg.agent.name(),
+                    args.agent.name()
+                );
+            }
+            (cfg, dir.clone(), true)
+        }
+        None => {
+            let cfg = TrainConfig::resolve(args.agent, &args.opts, args.seed)?;
+            let root = args.out.clone().unwrap_or_else(|| default_out(&cfg));
+            (cfg, root, false)
+        }
+    };
+    let mut cfg = cfg;
+    // Budget flags may extend a resumed run.
+    if resume {
+        if let Some(g) = args.opts.generations {
+            cfg.generations = g;
+        }
+        if let Some(e) = args.opts.episodes {
+            cfg.episodes = e;
+        }
+        if let Some(s) = args.opts.steps {
+            cfg.max_env_steps = Some(s);
+        }
+        if let Some(t) = args.opts.threads {
+            cfg.threads = t;
+        }
+    }
+    train(&cfg, &root, resume, !args.opts.no_progress)?;
+    Ok(root)
+}
+
+/// Trains `cfg` into `root` (a new folder, or an existing one when `resume`).
+pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Result<()> {
+    let make_env = env_factory(cfg)?;
+    let mut learner = build_learner(cfg, &make_env)?;
+    let mut state = CheckpointState {
+        version: 1,
+        rows: 0,
+        episodes: 0,
+        generations: 0,
+        env_steps: 0,
+        trainer_rng: learner.trainer().rng.clone(),
+        agent_updates: 0,
+        agent_rng: learner.trainer().agent.counters().1,
+        episode_open: false,
+        sigma: None,
+        es_generation: None,
+        wall_s: 0.0,
+        curve: Vec::new(),
+        q0: Vec::new(),
+    };
+    let mut run = if resume {
+        let dir = checkpoint::find(root).with_context(|| {
+            format!(
+                "{} has no complete checkpoint to resume from",
+                root.display()
+            )
+        })?;
+        state = checkpoint::load_state(&dir)?;
+        checkpoint::restore(&dir, &mut learner, &state)?;
+        eprintln!(
+            "resuming {} from {} ({} rows, {} env steps)",
+            root.display(),
+            dir.display(),
+            state.rows,
+            state.env_steps
+        );
+        RunDir::resume(root, state.rows)?
+    } else {
+        RunDir::create(root, &cfg.to_toml()?)?
+    };
+
+    let threads = if cfg.threads == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        cfg.threads
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("starting the rollout thread pool")?;
+
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = stop.clone();
+        // A second handler cannot be installed in the same process (tests); that only loses
+        // the graceful Ctrl-C, so it is not an error.
+        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
+    }
+
+    let total = if cfg.agent.is_hybrid() {
+        cfg.generations
+    } else {
+        cfg.episodes
+    };
+    let bar = progress_bar(total, state.rows, progress);
+    let mut last_log = Instant::now();
+    let started = Instant::now();
+    let wall0 = state.wall_s;
+    let mut finished = false;
+
+    if let Learner::Hybrid(h) = &mut learner {
+        let mut env = make_env();
+        h.warm_start(env.as_mut());
+    }
+
+    let mut diverged: Option<AgentError> = None;
+    loop {
+        let done = state.rows;
+        let budget_spent = cfg
+            .max_env_steps
+            .is_some_and(|b| learner.trainer().env_steps >= b);
+        if done >= total || budget_spent {
+            finished = true;
+            break;
+        }
+        if stop.load(Ordering::SeqCst) {
+            break;
+        }
+        let (row, curve, q0, msg) = match &mut learner {
+            Learner::Hybrid(h) => match h.step(make_env.as_ref(), &pool) {
+                Ok(r) => {
+                    let wall = wall0 + started.elapsed().as_secs_f64();
+                    let msg = format!(
+                        "gen {} best {:.1} rl {:.1} σ {:.3}",
+                        r.generation, r.best_fitness, r.rl_fitness, r.sigma
+                    );
+                    let mut v = serde_json::to_value(&r)?;
+                    if let Some(m) = v.as_object_mut() {
+                        m.insert("wall_s".into(), serde_json::json!(wall));
+                    }
+                    (v, r.curve, r.q0, msg)
+                }
+                Err(e) => {
+                    diverged = Some(e);
+                    break;
+                }
+            },
+            Learner::Plain(t) => {
+                let mut env = make_env();
+                match t.episode(env.as_mut()) {
+                    Ok(r) => {
+                        let wall = wall0 + started.elapsed().as_secs_f64();
+                        let msg = format!("ep {} return {:.1} len {}", r.episode, r.ret, r.length);
+                        let row = EpisodeRow {
+                            episode: r.episode,
+                            env_steps: r.env_steps,
+                            curve: r.ret,
+                            ret: r.ret,
+                            length: r.length,
+                            terminated: r.terminated,
+                            q0: r.q0,
+                            critic_loss: r.critic_loss,
+                            actor_loss: r.actor_loss,
+                            alpha: r.alpha,
+                            updates: r.updates,
+                            wall_s: wall,
+                        };
+                        (serde_json::to_value(&row)?, r.ret, r.q0, msg)
+                    }
+                    Err(e) => {
+                        diverged = Some(e);
+                        break;
+                    }
+                }
+            }
+        };
+        if !curve.is_finite() {
+            diverged = Some(AgentError::NonFinite {
+                what: "return",
+                update: learner.trainer().agent.updates(),
+            });
+            break;
+        }
+        run.append(&row)?;
+        state.rows += 1;
+        state.curve.push(curve);
+        state.q0.push(q0);
+        let best = state
+            .curve
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max);
+        bar.set_position(state.rows as u64);
+        bar.set_message(format!("{msg} | best {best:.1}"));
+        if !bar.is_hidden() {
+            // drawn by indicatif
+        } else if progress && last_log.elapsed().as_secs_f64() > 10.0 {
+            eprintln!("[{}/{}] {msg} | best {best:.1}", state.rows, total);
+            last_log = Instant::now();
+        }
+        write_summary(
+            &run,
+            cfg,
+            &learner,
+            &state,
+            wall0 + started.elapsed().as_secs_f64(),
+            false,
+        )?;
+        if state.rows % cfg.checkpoint_every == 0 {
+            save_checkpoint(
+                root,
+                &learner,
+                &mut state,
+                wall0 + started.elapsed().as_secs_f64(),
+            )?;
+        }
+    }
+    bar.finish_and_clear();
+    let wall = wall0 + started.elapsed().as_secs_f64();
+    if let Some(e) = diverged {
+        bail!(
+            "training stopped at row {}: {e}. The last good checkpoint in {} is kept; \
+             lower the learning rates or the gradient clip and resume or restart.",
+            state.rows,
+            root.join(RunDir::CHECKPOINT).display()
+        );
+    }
+    save_checkpoint(root, &learner, &mut state, wall)?;
+    write_summary(&run, cfg, &learner, &state, wall, finished)?;
+    if finished {
+        eprintln!(
+            "done: {} rows, {} env steps, {:.0} s → {}",
+            state.rows,
+            learner.trainer().env_steps,
+            wall,
+            root.display()
+        );
+    } else {
+        eprintln!(
+            "interrupted after {} rows; checkpoint written. Continue with: esrl train {} --resume {}",
+            state.rows,
+            cfg.agent.name(),
+            root.display()
+        );
+    }
+    Ok(())
+}
+
+fn progress_bar(total: usize, done: usize, show: bool) -> ProgressBar {
+    if !show || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(total as u64);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} [{elapsed_precise} < {eta_precise}] {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar.set_position(done as u64);
+    bar
+}
+
+fn save_checkpoint(
+    root: &Path,
+    learner: &Learner,
+    state: &mut CheckpointState,
+    wall: f64,
+) -> Result<()> {
+    let t = learner.trainer();
+    let (updates, rng) = t.agent.counters();
+    state.episodes = t.episodes;
+    state.env_steps = t.env_steps;
+    state.trainer_rng = t.rng.clone();
+    state.agent_updates = updates;
+    state.agent_rng = rng;
+    state.episode_open = t.buffer.episode_open();
+    state.wall_s = wall;
+    if let Learner::Hybrid(h) = learner {
+        state.generations = h.generation;
+        state.sigma = Some(h.strategy.sigma);
+        state.es_generation = Some(h.strategy.generation);
+    }
+    checkpoint::save(root, learner, state)
+}
+
+fn write_summary(
+    run: &RunDir,
+    cfg: &TrainConfig,
+    learner: &Learner,
+    state: &CheckpointState,
+    wall: f64,
+    finished: bool,
+) -> Result<()> {
+    if state.curve.is_empty() {
+        return Ok(());
+    }
+    let curve = CurveSummary::from_curve(&state.curve, None)?;
+    let summary = Summary {
+        agent: cfg.agent.name().into(),
+        env: cfg.env,
+        seed: cfg.seed,
+        curve,
+        q0_mean: esrl_metrics::nauc(&state.q0).ok(),
+        length: state.curve.len(),
+        env_steps: learner.trainer().env_steps,
+        best: state
+            .curve
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max),
+        wall_s: wall,
+        finished,
+    };
+    run.write_summary(&summary)
+}
