@@ -1,0 +1,54 @@
+"""Analyse esrl runs from Python: run folders and evaluations as NumPy arrays, the metrics of
+the paper (one implementation, in Rust), Fig. 5 plots and Table 1, MCAP recordings, and the
+environments as Gymnasium ``Env``\\ s.
+
+>>> import esrl_rs
+>>> run = esrl_rs.load_run("runs/pendulum")            # doctest: +SKIP
+>>> esrl_rs.metrics.best_win_50(run.metrics["curve"])   # doctest: +SKIP
+>>> env = esrl_rs.Pendulum()                            # doctest: +SKIP
+
+The work is done by the Rust crates of the esrl workspace (``esrl-metrics``, ``esrl-record``,
+``esrl-sim``) through the native module ``esrl_rs._native``; errors raised there arrive as
+``ValueError``, ``FileNotFoundError`` (or another ``OSError``) or :class:`EsrlError`, with the
+Rust message.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from . import metrics
+from ._native import (
+    EsrlError,
+    __version__,
+    load_eval,
+    read_recording,
+    read_recording_table,
+    recording_channels,
+)
+from .run import Run, group_by_agent, load_run, load_runs
+
+__all__ = [
+    "EsrlError",
+    "Pendulum",
+    "Run",
+    "WalkEnv",
+    "__version__",
+    "group_by_agent",
+    "load_eval",
+    "load_run",
+    "load_runs",
+    "metrics",
+    "read_recording",
+    "read_recording_table",
+    "recording_channels",
+]
+
+
+def __getattr__(name: str) -> Any:
+    # The environments need gymnasium; import it only when they are asked for.
+    if name in ("WalkEnv", "Pendulum"):
+        from . import envs
+
+        return getattr(envs, name)
+    raise AttributeError(f"module 'esrl_rs' has no attribute {name!r}")

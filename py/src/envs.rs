@@ -1,0 +1,238 @@
+//! The Rust core of the Gymnasium environments `esrl_rs.WalkEnv` and `esrl_rs.Pendulum`.
+//!
+//! `EnvCore` owns one `esrl_sim::Env` and does the stepping; the Python classes around it add
+//! the Gymnasium API (spaces, `np_random`, seeding). Panics inside the simulator are caught
+//! and raised as `EsrlError`; the environment then needs a `reset` before the next `step`.
+
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::Mutex;
+
+use esrl_sim::{Env, Pendulum, WalkConfig, WalkEnv};
+use numpy::{AllowTypeChange, PyArray1, PyArrayLike1};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+use crate::convert::json_to_py;
+use crate::errors::{esrl_error, panic_message, sim_error, value_error};
+use crate::metrics::from_py;
+
+/// Which task, with what the Python side needs to describe it.
+struct Task {
+    env: Box<dyn Env>,
+    /// Needs a reset before stepping (new, or after a caught panic).
+    needs_reset: bool,
+}
+
+/// One environment. Thread-safe (a `Mutex` around the Rust env); the GIL is released while
+/// the physics steps, so environments in different threads step in parallel.
+#[pyclass(module = "esrl_rs._native")]
+pub struct EnvCore {
+    task: Mutex<Task>,
+    name: &'static str,
+    obs_dim: usize,
+    act_dim: usize,
+    control_period: f32,
+    max_episode_steps: usize,
+    obs_names: Vec<String>,
+    action_names: Vec<String>,
+    effort_limits: Vec<f32>,
+    config: serde_json::Value,
+}
+
+fn guarded<T>(what: &str, f: impl FnOnce() -> T) -> PyResult<T> {
+    catch_unwind(AssertUnwindSafe(f)).map_err(|payload| {
+        esrl_error(format!(
+            "the simulator panicked during {what}: {}; call reset() before stepping again",
+            panic_message(payload.as_ref())
+        ))
+    })
+}
+
+impl EnvCore {
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Task>> {
+        self.task.lock().map_err(|_| {
+            esrl_error(format!(
+                "{} environment is poisoned by an earlier panic",
+                self.name
+            ))
+        })
+    }
+}
+
+#[pymethods]
+impl EnvCore {
+    /// The walking humanoid; `config` is a dict of `WalkConfig` fields (any subset, unknown
+    /// keys are errors).
+    #[staticmethod]
+    #[pyo3(signature = (config = None))]
+    fn walk(config: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let config: WalkConfig = match config {
+            Some(c) if !c.is_none() => from_py(c, "config")?,
+            _ => WalkConfig::default(),
+        };
+        let json = serde_json::to_value(&config).map_err(|e| value_error(e.to_string()))?;
+        let env = guarded("construction", || WalkEnv::new(config))?.map_err(sim_error)?;
+        Ok(Self {
+            name: "walk",
+            obs_dim: env.obs_dim(),
+            act_dim: env.act_dim(),
+            control_period: env.control_period(),
+            max_episode_steps: env.max_episode_steps(),
+            obs_names: env.obs_names(),
+            action_names: env.actuated_joint_names().to_vec(),
+            effort_limits: env.effort_limits().to_vec(),
+            config: json,
+            task: Mutex::new(Task {
+                env: Box::new(env),
+                needs_reset: true,
+            }),
+        })
+    }
+
+    /// Gymnasium `Pendulum-v1` (action in [-1, 1], scaled to ±2 N·m).
+    #[staticmethod]
+    fn pendulum() -> Self {
+        let env = Pendulum::new();
+        Self {
+            name: "pendulum",
+            obs_dim: env.obs_dim(),
+            act_dim: env.act_dim(),
+            control_period: env.control_period(),
+            max_episode_steps: env.max_episode_steps(),
+            obs_names: vec!["cos_theta".into(), "sin_theta".into(), "theta_dot".into()],
+            action_names: vec!["torque".into()],
+            effort_limits: vec![esrl_sim::pendulum::MAX_TORQUE as f32],
+            config: serde_json::Value::Object(Default::default()),
+            task: Mutex::new(Task {
+                env: Box::new(env),
+                needs_reset: true,
+            }),
+        }
+    }
+
+    /// `"walk"` or `"pendulum"`.
+    #[getter]
+    fn name(&self) -> &'static str {
+        self.name
+    }
+
+    /// Observation length.
+    #[getter]
+    fn obs_dim(&self) -> usize {
+        self.obs_dim
+    }
+
+    /// Action length.
+    #[getter]
+    fn act_dim(&self) -> usize {
+        self.act_dim
+    }
+
+    /// Control period, s.
+    #[getter]
+    fn control_period(&self) -> f32 {
+        self.control_period
+    }
+
+    /// Steps after which an episode is truncated.
+    #[getter]
+    fn max_episode_steps(&self) -> usize {
+        self.max_episode_steps
+    }
+
+    /// A name per observation index.
+    #[getter]
+    fn obs_names(&self) -> Vec<String> {
+        self.obs_names.clone()
+    }
+
+    /// A name per action index (actuated joints).
+    #[getter]
+    fn action_names(&self) -> Vec<String> {
+        self.action_names.clone()
+    }
+
+    /// Torque at action ±1 per actuator, N·m.
+    #[getter]
+    fn effort_limits(&self) -> Vec<f32> {
+        self.effort_limits.clone()
+    }
+
+    /// The resolved configuration (walk: every `WalkConfig` field; pendulum: empty).
+    #[getter]
+    fn config<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &self.config, false)
+    }
+
+    /// Resets with `seed` and returns the first observation (float32).
+    fn reset<'py>(&self, py: Python<'py>, seed: u64) -> PyResult<Bound<'py, PyArray1<f32>>> {
+        let mut task = self.lock()?;
+        let task = &mut *task;
+        let obs = py.detach(|| guarded("reset", || task.env.reset(seed)))?;
+        task.needs_reset = false;
+        Ok(PyArray1::from_vec(py, obs))
+    }
+
+    /// One control step: `(obs, reward, terminated, truncated, info)`; `info` holds
+    /// `reward_terms` (name → value, summing to the reward) and, for the walk task, `gait`.
+    fn step<'py>(
+        &self,
+        py: Python<'py>,
+        action: PyArrayLike1<'py, f32, AllowTypeChange>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        let action: Vec<f32> = action.as_array().iter().copied().collect();
+        if action.len() != self.act_dim {
+            return Err(value_error(format!(
+                "action: length {}, expected {} ({})",
+                action.len(),
+                self.act_dim,
+                self.action_names.join(", ")
+            )));
+        }
+        let mut task = self.lock()?;
+        let task = &mut *task;
+        if task.needs_reset {
+            return Err(esrl_error(format!(
+                "{}: call reset() before step()",
+                self.name
+            )));
+        }
+        let step = match py.detach(|| guarded("step", || task.env.step(&action))) {
+            Ok(step) => step,
+            Err(e) => {
+                task.needs_reset = true;
+                return Err(e);
+            }
+        };
+        let info = PyDict::new(py);
+        let terms = PyDict::new(py);
+        for (name, value) in &step.info.reward_terms {
+            terms.set_item(*name, *value as f64)?;
+        }
+        info.set_item("reward_terms", terms)?;
+        if let Some(gait) = &step.info.gait {
+            let json = serde_json::to_value(gait).map_err(|e| value_error(e.to_string()))?;
+            info.set_item("gait", json_to_py(py, &json, true)?)?;
+        }
+        let obs = PyArray1::from_vec(py, step.obs);
+        PyTuple::new(
+            py,
+            [
+                obs.into_any(),
+                (step.reward as f64).into_pyobject(py)?.into_any(),
+                pyo3::types::PyBool::new(py, step.terminated)
+                    .to_owned()
+                    .into_any(),
+                pyo3::types::PyBool::new(py, step.truncated)
+                    .to_owned()
+                    .into_any(),
+                info.into_any(),
+            ],
+        )
+    }
+}
+
+/// Registers the class.
+pub fn register(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    module.add_class::<EnvCore>()
+}

@@ -1,0 +1,42 @@
+//! `esrl_rs._native`: the Rust core of the `esrl_rs` Python package (SPEC §7).
+//!
+//! Thin bindings over the workspace crates; the Python package `esrl_rs` (in `py/python`)
+//! re-exports them with typed stubs:
+//!
+//! - `load_run`, `load_eval`: run folders and `eval.json` as dicts of NumPy arrays;
+//! - `metrics.*`: `esrl-metrics` (AUC, nAUC, Final-50, Best-Win-50, Episodes-to-Target,
+//!   mean ± SD, gait metrics, Table 1);
+//! - `read_recording`, `read_recording_table`, `recording_channels`: MCAP recordings via
+//!   `esrl-record`;
+//! - `EnvCore`: `esrl-sim`'s `WalkEnv` and `Pendulum`, wrapped by the Gymnasium classes.
+//!
+//! Errors become `ValueError`, `FileNotFoundError`/`OSError` or `esrl_rs.EsrlError` with the
+//! Rust message (see `errors`); simulator panics are caught and raised as `EsrlError`.
+//!
+//! Limitations: loading a run's policy weights is not bound yet (the checkpoint format of the
+//! CLI is still being written).
+
+mod convert;
+mod envs;
+mod errors;
+mod metrics;
+mod recording;
+mod run;
+
+use pyo3::prelude::*;
+
+/// The native module.
+#[pymodule]
+#[pyo3(name = "_native")]
+fn native(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = module.py();
+    module.add("EsrlError", py.get_type::<errors::EsrlError>())?;
+    module.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    run::register(module)?;
+    recording::register(module)?;
+    envs::register(module)?;
+    let metrics = PyModule::new(py, "metrics")?;
+    metrics::register(&metrics)?;
+    module.add_submodule(&metrics)?;
+    Ok(())
+}
