@@ -123,6 +123,16 @@ impl Hybrid {
         taken
     }
 
+    /// This generation's individuals: the RL actor's genome first, then N − 1 perturbations of
+    /// the ES mean.
+    pub fn population(&self) -> Vec<Vec<f32>> {
+        let n = self.es.population;
+        let mut genomes = Vec::with_capacity(n);
+        genomes.push(self.trainer.agent.genome());
+        genomes.extend((1..n).map(|i| self.strategy.perturbation(i)));
+        genomes
+    }
+
     /// Runs one generation. `make_env` builds an environment per individual (called from pool
     /// threads); `pool` runs the rollouts.
     pub fn step(
@@ -131,10 +141,8 @@ impl Hybrid {
         pool: &rayon::ThreadPool,
     ) -> Result<GenerationReport, AgentError> {
         let n = self.es.population;
+        let genomes = self.population();
         let agent = &self.trainer.agent;
-        let mut genomes = Vec::with_capacity(n);
-        genomes.push(agent.genome());
-        genomes.extend((1..n).map(|i| self.strategy.perturbation(i)));
 
         let gen = self.generation as u64;
         let seed = self.trainer.seed;
@@ -226,4 +234,71 @@ impl Hybrid {
 /// Position of the best of `fitness` (NaN worst, ties to the lowest index).
 pub fn best_index(fitness: &[f64]) -> Option<usize> {
     rank(fitness).first().copied()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use esrl_agents::{NetConfig, RlConfig};
+    use esrl_sim::Pendulum;
+
+    fn hybrid(algo: Algo) -> Hybrid {
+        let cfg = RlConfig {
+            batch_size: 8,
+            warm_start: 100,
+            ..RlConfig::default()
+        };
+        let agent = Agent::new(algo, 3, 1, &NetConfig::tiny(false), &cfg, 7).unwrap();
+        let es = EsConfig {
+            population: 6,
+            sigma: 0.5,
+            ..EsConfig::default()
+        };
+        Hybrid::new(agent, es, 3, 7)
+    }
+
+    #[test]
+    fn rl_actor_is_in_every_population_and_replaced_only_when_beaten() {
+        let make_env = || Box::new(Pendulum::new()) as Box<dyn Env>;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        for algo in [Algo::Sac, Algo::Td3, Algo::Ddpg] {
+            let mut h = hybrid(algo);
+            h.warm_start(make_env().as_mut());
+            let (mut replaced, mut kept) = (0, 0);
+            for _ in 0..8 {
+                let population = h.population();
+                assert_eq!(population.len(), 6);
+                assert_eq!(
+                    population[0],
+                    h.trainer.agent.genome(),
+                    "individual 0 is the RL actor"
+                );
+                let r = h.step(&make_env, &pool).unwrap();
+                assert_eq!(
+                    r.rl_replaced,
+                    r.best_fitness > r.rl_fitness,
+                    "{algo:?}: {r:?}"
+                );
+                if r.rl_replaced {
+                    replaced += 1;
+                    let best = population
+                        .iter()
+                        .position(|g| *g == h.trainer.agent.genome())
+                        .expect("the replaced actor carries a population member's genome");
+                    assert_ne!(best, 0);
+                } else {
+                    kept += 1;
+                    assert_eq!(r.rl_rank, 0, "not replaced means the RL actor was best");
+                }
+                assert_eq!(r.curve, r.best_fitness);
+            }
+            assert!(
+                replaced > 0 && kept + replaced == 8,
+                "{algo:?}: replaced {replaced} of 8"
+            );
+        }
+    }
 }
