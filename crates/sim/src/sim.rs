@@ -28,6 +28,9 @@ pub struct PhysicsConfig {
     /// Coulomb friction coefficient of robot and ground colliders (Rapier averages the two).
     /// Default 1.0 (SPEC §2: "flat, friction about 1").
     pub friction: f32,
+    /// Armature (reflected actuator inertia, kg·m², MuJoCo's `armature`) that `WalkEnv` adds
+    /// to each torque-controlled joint. Default 0.1: see the crate docs ("Joint limits").
+    pub actuator_armature: f32,
     /// Whether links of the robot collide with each other. Default false: with sagittal
     /// legs and limited shoulders the segments cannot meet in a meaningful way, and the
     /// paper's Simscape model only has foot/body–ground contact.
@@ -41,6 +44,7 @@ impl Default for PhysicsConfig {
             solver_iterations: 4,
             gravity: 9.81,
             friction: 1.0,
+            actuator_armature: 0.1,
             self_collisions: false,
         }
     }
@@ -105,6 +109,9 @@ pub struct SimSetup {
     pub base: Base,
     /// Whether to add the flat ground (top surface at z = 0).
     pub ground: bool,
+    /// Armature (reflected actuator inertia, kg·m², MuJoCo's `armature`) per joint in URDF
+    /// order; missing entries are 0.
+    pub armature: Vec<f32>,
 }
 
 /// Initial state of a robot: root position (upright), joint positions and velocities, one per
@@ -132,6 +139,8 @@ pub struct RobotSim {
     multibody: Option<MultibodyIndex>,
     /// Per joint: multibody link id of its child.
     link_ids: Vec<usize>,
+    /// Translation from the root link frame to the root body frame (its centre of mass).
+    root_shift: Vector,
     /// Per joint: unit axis in the parent link frame.
     axis_in_parent: Vec<Vector>,
     torques: Vec<f32>,
@@ -147,6 +156,17 @@ impl RobotSim {
         state: &RobotState,
     ) -> Result<Self, SimError> {
         setup.physics.validate("physics.")?;
+        if let Some(a) = setup
+            .armature
+            .iter()
+            .find(|a| !(a.is_finite() && **a >= 0.0))
+        {
+            return Err(SimError::Config {
+                field: "armature".into(),
+                value: a.to_string(),
+                reason: "must be finite and ≥ 0".into(),
+            });
+        }
         if !(setup.dt.is_finite() && setup.dt > 0.0) {
             return Err(SimError::Config {
                 field: "dt".into(),
@@ -190,6 +210,13 @@ impl RobotSim {
 
         let base = Iso::from_translation(state.base_position);
         let poses = model.forward_kinematics(&base, &state.q);
+        // Rapier 0.36 treats the linear velocity of a free multibody root as the velocity of
+        // its centre of mass but integrates it as the velocity of the body frame origin, so a
+        // root whose centre of mass is off its frame origin does not conserve momentum. The
+        // root body's frame is therefore placed at its centre of mass; `root_shift` converts.
+        let shift = model.links()[root].com;
+        let root_body = Iso::from_translation(shift);
+        let unshift = Iso::from_translation(math::scale(shift, -1.0));
         let robot_filter = if setup.physics.self_collisions {
             ROBOT_GROUP | GROUND_GROUP
         } else {
@@ -206,10 +233,17 @@ impl RobotSim {
             } else {
                 RigidBodyBuilder::dynamic()
             }
-            .pose(poses[l].to_pose())
+            .pose(
+                if l == root {
+                    poses[l].mul(&root_body)
+                } else {
+                    poses[l]
+                }
+                .to_pose(),
+            )
             .can_sleep(false);
             if link.mass > 0.0 {
-                let c = link.com;
+                let c = if l == root { [0.0; 3] } else { link.com };
                 let mut inertia = [[0.0f32; 3]; 3];
                 for (r, row) in inertia.iter_mut().enumerate() {
                     for (k, v) in row.iter_mut().enumerate() {
@@ -239,7 +273,11 @@ impl RobotSim {
                         math::axis_angle([1.0, 0.0, 0.0], std::f64::consts::FRAC_PI_2),
                     ),
                 };
-                let pose = origin.mul(&Iso::from_rotation(extra)).to_pose();
+                let mut pose = origin.mul(&Iso::from_rotation(extra));
+                if l == root {
+                    pose = unshift.mul(&pose);
+                }
+                let pose = pose.to_pose();
                 let collider = builder
                     .position(pose)
                     .density(0.0)
@@ -260,7 +298,10 @@ impl RobotSim {
                 JointKind::Fixed => (JointAxesMask::LOCKED_FIXED_AXES, math::IDENTITY),
                 _ => (JointAxesMask::LOCKED_REVOLUTE_AXES, math::x_onto(j.axis)),
             };
-            let frame1 = j.origin.mul(&Iso::from_rotation(frame_rot));
+            let mut frame1 = j.origin.mul(&Iso::from_rotation(frame_rot));
+            if j.parent == root {
+                frame1 = unshift.mul(&frame1);
+            }
             let frame2 = Iso::from_rotation(frame_rot);
             let mut builder = GenericJointBuilder::new(locked)
                 .local_frame1(frame1.to_pose())
@@ -329,6 +370,8 @@ impl RobotSim {
                 }
                 for &(dof, ji) in &dofs {
                     let j = &model.joints()[ji];
+                    mb.armature_mut()[dof] =
+                        setup.armature.get(ji).copied().unwrap_or(0.0).max(0.0);
                     mb.damping_mut()[dof] = j.damping as f32;
                     mb.frictions_mut()[dof] = j.friction as f32;
                     mb.generalized_velocity_mut()[dof] =
@@ -338,6 +381,7 @@ impl RobotSim {
         }
 
         Self {
+            root_shift: Vector::new(shift[0] as f32, shift[1] as f32, shift[2] as f32),
             world,
             bodies,
             colliders,
@@ -475,28 +519,58 @@ impl RobotSim {
 
     /// World pose of link `l`'s frame.
     pub fn link_pose(&self, l: usize) -> Pose {
-        self.world
+        let pose = self
+            .world
             .bodies
             .get(self.bodies[l])
-            .map_or(Pose::IDENTITY, |b| *b.position())
+            .map_or(Pose::IDENTITY, |b| *b.position());
+        if l == self.model.root() {
+            pose * Pose::from_translation(-self.root_shift)
+        } else {
+            pose
+        }
     }
 
-    /// World linear velocity of link `l`'s frame origin, m/s.
-    pub fn link_origin_velocity(&self, l: usize) -> Vector {
+    /// World position of link `l`'s centre of mass, m.
+    pub fn link_center_of_mass(&self, l: usize) -> Vector {
         self.world
             .bodies
             .get(self.bodies[l])
             .map_or(Vector::ZERO, |b| {
-                b.velocity_at_point(b.position().translation)
+                b.position().transform_point(b.local_center_of_mass())
             })
+    }
+
+    /// World velocity of link `l`: (linear velocity of its centre of mass, angular velocity).
+    ///
+    /// Read from the multibody's generalised velocities through the link Jacobian: Rapier
+    /// refreshes the rigid-body velocities of multibody links only at the start of each solver
+    /// substep, so after a step they lag by one substep.
+    pub fn link_velocity(&self, l: usize) -> (Vector, Vector) {
+        let id = if l == self.model.root() {
+            Some(0)
+        } else {
+            self.model.parent_joint(l).map(|j| self.link_ids[j])
+        };
+        if let (Some(mb), Some(id)) = (self.mb(), id) {
+            let v = mb.body_jacobian(id) * mb.generalized_velocity();
+            return (Vector::new(v[0], v[1], v[2]), Vector::new(v[3], v[4], v[5]));
+        }
+        self.world
+            .bodies
+            .get(self.bodies[l])
+            .map_or((Vector::ZERO, Vector::ZERO), |b| (b.linvel(), b.angvel()))
+    }
+
+    /// World linear velocity of link `l`'s frame origin, m/s.
+    pub fn link_origin_velocity(&self, l: usize) -> Vector {
+        let (v, w) = self.link_velocity(l);
+        v + w.cross(self.link_pose(l).translation - self.link_center_of_mass(l))
     }
 
     /// World angular velocity of link `l`, rad/s.
     pub fn link_angular_velocity(&self, l: usize) -> Vector {
-        self.world
-            .bodies
-            .get(self.bodies[l])
-            .map_or(Vector::ZERO, |b| b.angvel())
+        self.link_velocity(l).1
     }
 
     /// All link frames in the world, URDF link order.
@@ -529,9 +603,12 @@ impl RobotSim {
     pub fn center_of_mass(&self) -> Vector {
         let mut m = 0.0;
         let mut c = Vector::ZERO;
-        for b in self.bodies.iter().filter_map(|&h| self.world.bodies.get(h)) {
+        for (l, b) in self.bodies.iter().enumerate() {
+            let Some(b) = self.world.bodies.get(*b) else {
+                continue;
+            };
             m += b.mass();
-            c += b.center_of_mass() * b.mass();
+            c += self.link_center_of_mass(l) * b.mass();
         }
         if m > 0.0 {
             c / m

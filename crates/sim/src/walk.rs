@@ -445,11 +445,16 @@ impl WalkEnv {
             });
         }
         let substeps = config.physics.substeps;
+        let mut armature = vec![0.0; model.joints().len()];
+        for &j in &actuated {
+            armature[j] = config.physics.actuator_armature;
+        }
         let setup = SimSetup {
             dt: config.control_period / substeps as f32,
             physics: config.physics.clone(),
             base: Base::Floating,
             ground: true,
+            armature,
         };
         let max_steps = (config.episode_seconds / config.control_period)
             .round()
