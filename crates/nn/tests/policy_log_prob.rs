@@ -64,7 +64,7 @@ fn values_match_change_of_variables_density() {
     assert_close("action", &act, &r[..n * a], 1e-6, 1e-6);
     assert_close("log_prob", &lp, &r[n * a..], 1e-5, 1e-5);
     // Naive form agrees where it is well conditioned.
-    for k in 0..n {
+    for (k, &lp_k) in lp.iter().enumerate() {
         let naive: f64 = (0..a)
             .map(|j| {
                 let i = k * a + j;
@@ -76,9 +76,8 @@ fn values_match_change_of_variables_density() {
             })
             .sum();
         assert!(
-            (lp[k] as f64 - naive).abs() < 1e-4,
-            "{} vs naive {naive}",
-            lp[k]
+            (lp_k as f64 - naive).abs() < 1e-4,
+            "{lp_k} vs naive {naive}"
         );
     }
 }
