@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use numpy::{PyArray1, PyArray2};
+use numpy::{AllowTypeChange, PyArray1, PyArray2, PyArrayLike1};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -81,10 +81,90 @@ pub fn recording_channels<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound
     Ok(list)
 }
 
+/// Writes scalar topics to an MCAP file that Foxglove plots: `topics` maps a topic name to
+/// `{field: 1-D array}`, every column one value per entry of `time` (s since reset,
+/// strictly increasing). The scene is the 50 m track without a robot. Returns the messages written.
+#[pyfunction]
+pub fn write_recording(
+    path: PathBuf,
+    topics: &Bound<'_, PyDict>,
+    time: PyArrayLike1<'_, f64, AllowTypeChange>,
+) -> PyResult<u64> {
+    let time: Vec<f64> = time.as_array().iter().copied().collect();
+    if let Some(i) = time.iter().position(|t| !(t.is_finite() && *t >= 0.0)) {
+        return Err(value_error(format!(
+            "time[{i}] = {}: must be finite and ≥ 0",
+            time[i]
+        )));
+    }
+    let mut declared = Vec::new();
+    let mut columns: Vec<Vec<Vec<f64>>> = Vec::new();
+    for (topic, fields) in topics.iter() {
+        let topic: String = topic
+            .extract()
+            .map_err(|_| value_error("topics: keys must be topic names (str)"))?;
+        let fields = fields
+            .cast::<PyDict>()
+            .map_err(|_| value_error(format!("topics[{topic:?}]: expected a dict of columns")))?;
+        let mut names = Vec::new();
+        let mut cols = Vec::new();
+        for (name, values) in fields.iter() {
+            let name: String = name
+                .extract()
+                .map_err(|_| value_error(format!("topics[{topic:?}]: field names must be str")))?;
+            let values: PyArrayLike1<'_, f64, AllowTypeChange> = values.extract().map_err(|e| {
+                value_error(format!(
+                    "topics[{topic:?}][{name:?}]: not a 1-D array of numbers: {e}"
+                ))
+            })?;
+            let values: Vec<f64> = values.as_array().iter().copied().collect();
+            if values.len() != time.len() {
+                return Err(value_error(format!(
+                    "topics[{topic:?}][{name:?}]: length {}, expected {} (the length of time)",
+                    values.len(),
+                    time.len()
+                )));
+            }
+            names.push(name);
+            cols.push(values);
+        }
+        let refs: Vec<&str> = names.iter().map(String::as_str).collect();
+        declared.push(esrl_record::ScalarTopic::new(&topic, &refs));
+        columns.push(cols);
+    }
+    let frames: Vec<esrl_record::Frame> = time
+        .iter()
+        .enumerate()
+        .map(|(k, t)| esrl_record::Frame {
+            time_ns: (t * 1e9).round() as u64,
+            link_poses: Vec::new(),
+            scalars: columns
+                .iter()
+                .map(|cols| cols.iter().map(|c| c[k]).collect())
+                .collect(),
+        })
+        .collect();
+    let scene = esrl_record::Scene {
+        links: Vec::new(),
+        world_shapes: Vec::new(),
+    }
+    .with_track(50.0);
+    let stats = esrl_record::write_recording(
+        &path,
+        &scene,
+        &declared,
+        &frames,
+        esrl_record::RecordOptions::default(),
+    )
+    .map_err(|e| record_error(&path, e))?;
+    Ok(stats.messages)
+}
+
 /// Registers the functions.
 pub fn register(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(read_recording, module)?)?;
     module.add_function(wrap_pyfunction!(read_recording_table, module)?)?;
     module.add_function(wrap_pyfunction!(recording_channels, module)?)?;
+    module.add_function(wrap_pyfunction!(write_recording, module)?)?;
     Ok(())
 }

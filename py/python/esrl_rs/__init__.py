@@ -25,6 +25,7 @@ from ._native import (
     read_recording,
     read_recording_table,
     recording_channels,
+    write_recording,
 )
 from .run import Run, group_by_agent, load_run, load_runs
 
@@ -42,6 +43,7 @@ __all__ = [
     "read_recording",
     "read_recording_table",
     "recording_channels",
+    "write_recording",
 ]
 
 

@@ -74,11 +74,11 @@ class _RustEnv(gym.Env):  # type: ignore[type-arg]
     ) -> Tuple[np.ndarray, Dict[str, Any]]:
         """Resets to a seeded initial state; ``info["seed"]`` is the seed the Rust core used.
         ``options`` is accepted for API compatibility and ignored."""
+        if seed is not None and not 0 <= int(seed) < 2**64:
+            raise ValueError(f"seed={seed}: must be an integer in [0, 2**64)")
         super().reset(seed=seed)
         if seed is None:
             seed = int(self.np_random.integers(0, _SEED_BOUND))
-        elif not 0 <= int(seed) < 2**64:
-            raise ValueError(f"seed={seed}: must be in [0, 2**64)")
         obs = self._core.reset(int(seed))
         return obs, {"seed": int(seed)}
 
