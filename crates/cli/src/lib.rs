@@ -4,6 +4,9 @@
 pub mod args;
 pub mod bench;
 pub mod checkpoint;
+pub mod compare;
 pub mod config;
+pub mod eval;
+pub mod record;
 pub mod run_dir;
 pub mod train;

@@ -9,9 +9,9 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Train(args) => esrl::train::run(args).map(|_| ()),
         Command::Bench(args) => esrl::bench::run(&args.what),
-        Command::Eval(_) | Command::Compare(_) | Command::Record(_) => {
-            Err(anyhow::anyhow!("this command is not available yet"))
-        }
+        Command::Eval(args) => esrl::eval::run(args),
+        Command::Compare(args) => esrl::compare::run(args),
+        Command::Record(args) => esrl::record::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,128 @@
+//! Contract: `esrl compare --agents es-sac,sac --seeds 2 --preset smoke` trains and evaluates
+//! every agent × seed and writes table.md / table.csv with one row per agent, whose nAUC is
+//! the mean over seeds of the nAUC recomputed here from each run's metrics.jsonl; a second
+//! invocation reuses the finished runs (no file of theirs is rewritten) and writes the same
+//! table; unknown agent names fail with the list of valid ones.
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+use std::time::SystemTime;
+
+fn esrl(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_esrl"))
+        .args(args)
+        .output()
+        .expect("run esrl")
+}
+
+fn ok(args: &[&str]) -> Output {
+    let out = esrl(args);
+    assert!(
+        out.status.success(),
+        "esrl {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn nauc(run: &Path) -> f64 {
+    let curve: Vec<f64> = std::fs::read_to_string(run.join("metrics.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).unwrap()["curve"].as_f64().unwrap())
+        .collect();
+    curve.iter().sum::<f64>() / curve.len() as f64
+}
+
+fn mtimes(dir: &Path) -> Vec<(String, SystemTime)> {
+    let mut out = Vec::new();
+    for run in ["es-sac-s0", "es-sac-s1", "sac-s0", "sac-s1"] {
+        for f in ["metrics.jsonl", "summary.json", "checkpoint/state.json", "eval.json"] {
+            let p = dir.join(run).join(f);
+            let t = std::fs::metadata(&p)
+                .and_then(|m| m.modified())
+                .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            out.push((format!("{run}/{f}"), t));
+        }
+    }
+    out
+}
+
+#[test]
+fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("cmp");
+    let d = dir.to_str().unwrap();
+    let args = [
+        "compare",
+        "--agents",
+        "es-sac,sac",
+        "--seeds",
+        "2",
+        "--preset",
+        "smoke",
+        "--out",
+        d,
+        "--no-progress",
+        "--jobs",
+        "2",
+    ];
+    let first = ok(&args);
+    let stdout = String::from_utf8_lossy(&first.stdout).to_string();
+    assert!(stdout.contains("| es-sac | 2 |"), "{stdout}");
+    assert!(stdout.contains("| sac | 2 |"), "{stdout}");
+
+    let md = std::fs::read_to_string(dir.join("table.md")).unwrap();
+    let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| ")).collect();
+    // Table 1 (header + 2 agents) and the actuator table (header + 2 agents).
+    assert_eq!(rows.iter().filter(|l| l.starts_with("| es-sac |")).count(), 2);
+    assert_eq!(rows.iter().filter(|l| l.starts_with("| sac |")).count(), 2);
+    assert!(md.contains("Best-Win-50") && md.contains("Episodes-to-Target"));
+
+    let csv = std::fs::read_to_string(dir.join("table.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(lines.len(), 3, "header + one row per agent:\n{csv}");
+    let header: Vec<&str> = lines[0].split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    for (line, agent) in lines[1..].iter().zip(["es-sac", "sac"]) {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells[0], agent);
+        assert_eq!(cells[col("seeds")], "2");
+        let want = (nauc(&dir.join(format!("{agent}-s0"))) + nauc(&dir.join(format!("{agent}-s1"))))
+            / 2.0;
+        let got: f64 = cells[col("nauc_mean")].parse().unwrap();
+        assert!((got - want).abs() < 1e-9 * (1.0 + want.abs()), "{agent}: {got} vs {want}");
+        assert_eq!(cells[col("gait_runs")], "2", "both seeds evaluated");
+        assert_eq!(cells[col("q0_mean_n")], "2");
+    }
+
+    let before = mtimes(&dir);
+    let second = ok(&args);
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert_eq!(err.matches("reusing finished run").count(), 4, "{err}");
+    assert!(!err.contains("training "), "nothing retrained: {err}");
+    assert_eq!(mtimes(&dir), before, "finished runs and their evaluations are untouched");
+    assert_eq!(String::from_utf8_lossy(&second.stdout), stdout);
+    assert_eq!(std::fs::read_to_string(dir.join("table.csv")).unwrap(), csv);
+}
+
+#[test]
+fn unknown_agents_are_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("cmp");
+    let out = esrl(&[
+        "compare",
+        "--agents",
+        "es-sac,nonsense",
+        "--preset",
+        "smoke",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("unknown agent `nonsense`"), "{err}");
+    assert!(err.contains("es-sac, es-td3, es-ddpg, sac, td3, ddpg"), "{err}");
+    assert!(!dir.exists(), "nothing trained or written");
+}

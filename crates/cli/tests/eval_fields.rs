@@ -1,0 +1,195 @@
+//! Contract: `esrl eval` on a smoke-trained ES-SAC run writes `RUN/eval.json` with every field
+//! the Python package reads (run, agent, episodes with seed/return/length/q0/gait/trace, mean),
+//! with values that agree with the episode's own trace (recomputed here), deterministic across
+//! invocations and the same whether given the run or its checkpoint folder; `--json` prints
+//! the same object; `--record` writes one MCAP per episode; a pendulum run has returns only.
+
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn esrl(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_esrl"))
+        .args(args)
+        .output()
+        .expect("run esrl")
+}
+
+fn ok(args: &[&str]) -> Output {
+    let out = esrl(args);
+    assert!(
+        out.status.success(),
+        "esrl {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+fn read_json(p: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+fn floats(v: &Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap_or_else(|| panic!("expected an array, got {v}"))
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+const GAIT_KEYS: [&str; 19] = [
+    "track_length",
+    "track_time",
+    "mean_forward_velocity",
+    "mean_abs_lateral",
+    "mean_vertical",
+    "mean_abs_vertical",
+    "actuator_names",
+    "mean_abs_torque",
+    "mean_abs_power",
+    "mean_abs_torque_overall",
+    "mean_abs_power_overall",
+    "knee_torque_asymmetry",
+    "foot_names",
+    "mean_foot_force",
+    "distance",
+    "fell",
+    "steps",
+    "duration",
+    "track_length",
+];
+
+#[test]
+fn eval_json_has_every_field_and_agrees_with_its_trace() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("run");
+    let r = run.to_str().unwrap();
+    ok(&[
+        "train",
+        "es-sac",
+        "--preset",
+        "smoke",
+        "--out",
+        r,
+        "--no-progress",
+    ]);
+    let rec = tmp.path().join("rec");
+    let out = ok(&[
+        "eval",
+        r,
+        "--episodes",
+        "2",
+        "--seed",
+        "3",
+        "--record",
+        rec.to_str().unwrap(),
+    ]);
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("left_knee"), "table lists actuators:\n{table}");
+    let eval = read_json(&run.join("eval.json"));
+    assert_eq!(eval["agent"], "es-sac");
+    assert!(eval["run"].as_str().unwrap().ends_with("run"));
+    let episodes = eval["episodes"].as_array().unwrap();
+    assert_eq!(episodes.len(), 2);
+    for (k, e) in episodes.iter().enumerate() {
+        assert_eq!(e["seed"].as_u64(), Some(3 + k as u64));
+        assert!(e["return"].as_f64().unwrap().is_finite());
+        assert!(e["q0"].as_f64().unwrap().is_finite());
+        let len = e["length"].as_u64().unwrap() as usize;
+        assert!(len > 0);
+        let g = &e["gait"];
+        for key in GAIT_KEYS {
+            assert!(g.get(key).is_some(), "gait.{key} missing: {g}");
+        }
+        let tr = &e["trace"];
+        let time = floats(&tr["time"]);
+        let (x, y, z) = (floats(&tr["x"]), floats(&tr["y"]), floats(&tr["z_error"]));
+        let v = floats(&tr["forward_velocity"]);
+        assert_eq!(time.len(), len, "one trace sample per step");
+        for a in [&x, &y, &z, &v] {
+            assert_eq!(a.len(), len);
+        }
+        // Sim time after step i is (i + 1) × 25 ms.
+        for (i, t) in time.iter().enumerate() {
+            assert!((t - (i + 1) as f64 * 0.025).abs() < 1e-5, "time[{i}] = {t}");
+        }
+        // The metrics recomputed by hand from the trace.
+        assert_eq!(g["steps"].as_u64(), Some(len as u64));
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + b.abs());
+        assert!(close(g["distance"].as_f64().unwrap(), x[len - 1] - x[0]));
+        let lat = mean(&y.iter().map(|v| v.abs()).collect::<Vec<_>>());
+        assert!(close(g["mean_abs_lateral"].as_f64().unwrap(), lat));
+        assert!(close(g["mean_vertical"].as_f64().unwrap(), mean(&z)));
+        assert!(close(g["mean_forward_velocity"].as_f64().unwrap(), mean(&v)));
+        let tau = floats(&g["mean_abs_torque"]);
+        assert_eq!(tau.len(), 6);
+        assert!(close(g["mean_abs_torque_overall"].as_f64().unwrap(), mean(&tau)));
+        // A 1 s smoke episode cannot cover 50 m.
+        assert!(g["track_time"].is_null());
+        let ended = e["terminated"].as_bool().unwrap() || e["truncated"].as_bool().unwrap();
+        assert!(ended);
+        assert_eq!(g["fell"].as_bool(), e["terminated"].as_bool());
+        assert!(rec.join(format!("episode-{k:03}.mcap")).is_file());
+    }
+    let m = &eval["mean"];
+    let returns: Vec<f64> = episodes.iter().map(|e| e["return"].as_f64().unwrap()).collect();
+    assert!((m["return"].as_f64().unwrap() - mean(&returns)).abs() < 1e-9);
+    assert_eq!(m["episodes"].as_u64(), Some(2));
+    for key in ["return_sd", "length", "q0", "falls", "finished", "gait"] {
+        assert!(m.get(key).is_some(), "mean.{key} missing");
+    }
+    let d: Vec<f64> = episodes
+        .iter()
+        .map(|e| e["gait"]["distance"].as_f64().unwrap())
+        .collect();
+    assert!((m["gait"]["distance"].as_f64().unwrap() - mean(&d)).abs() < 1e-9);
+
+    // The checkpoint folder gives the same numbers; --json prints the file's object.
+    let out = ok(&[
+        "eval",
+        run.join("checkpoint").to_str().unwrap(),
+        "--episodes",
+        "2",
+        "--seed",
+        "3",
+        "--json",
+    ]);
+    let printed: Value = serde_json::from_slice(&out.stdout).expect("--json prints one object");
+    let again = read_json(&run.join("eval.json"));
+    assert_eq!(printed, again);
+    assert_eq!(again["episodes"], eval["episodes"], "deterministic");
+}
+
+#[test]
+fn pendulum_eval_has_returns_only() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("p");
+    let r = run.to_str().unwrap();
+    ok(&[
+        "train",
+        "sac",
+        "--env",
+        "pendulum",
+        "--preset",
+        "smoke",
+        "--out",
+        r,
+        "--no-progress",
+    ]);
+    ok(&["eval", r, "--episodes", "2"]);
+    let eval = read_json(&run.join("eval.json"));
+    for e in eval["episodes"].as_array().unwrap() {
+        assert!(e["gait"].is_null());
+        assert!(e.get("trace").is_none());
+        assert_eq!(e["length"].as_u64(), Some(200), "Pendulum-v1 truncates at 200");
+        assert!(e["return"].as_f64().unwrap() < 0.0, "pendulum rewards are ≤ 0");
+    }
+    assert!(eval["mean"]["gait"].is_null());
+    let out = esrl(&["eval", r, "--record", tmp.path().join("rec").to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("pendulum"));
+}
