@@ -39,8 +39,7 @@ use crate::eval::{self, EvalReport, EVAL_FILE};
 use crate::run_dir::{write_atomic, RunDir};
 use anyhow::{bail, Context, Result};
 use esrl_metrics::{
-    actuator_markdown, summarize_method, table1, table1_csv, table1_markdown, AgentRuns,
-    SeedResult,
+    actuator_markdown, summarize_method, table1, table1_csv, table1_markdown, AgentRuns, SeedResult,
 };
 use serde_json::Value;
 use std::collections::VecDeque;
@@ -116,7 +115,8 @@ fn read_summary(dir: &Path) -> Result<Option<Value>> {
         return Ok(None);
     }
     let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-    let v: Value = serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
+    let v: Value =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
     Ok(Some(v))
 }
 
@@ -298,12 +298,16 @@ pub fn read_curve(dir: &Path) -> Result<(Vec<f64>, Option<f64>)> {
     let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
     let mut curve = Vec::new();
     let (mut q_sum, mut q_n) = (0.0, 0usize);
-    for (i, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+    for (i, line) in text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+    {
         let row: Value = serde_json::from_str(line)
             .with_context(|| format!("{} line {}: not JSON", p.display(), i + 1))?;
-        let c = row["curve"].as_f64().with_context(|| {
-            format!("{} line {}: no numeric `curve`", p.display(), i + 1)
-        })?;
+        let c = row["curve"]
+            .as_f64()
+            .with_context(|| format!("{} line {}: no numeric `curve`", p.display(), i + 1))?;
         curve.push(c);
         if let Some(q) = row["q0"].as_f64().filter(|q| q.is_finite()) {
             q_sum += q;
@@ -400,6 +404,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     }
 
     let mut budget_note = None;
+    // The run that set the --equal-steps budget (already reported above).
+    let mut budget_run: Option<PathBuf> = None;
     if args.equal_steps {
         let reference_agent = agents
             .iter()
@@ -416,6 +422,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         ensure_trained(&reference, !args.opts.no_progress, "[budget]")
             .with_context(|| "training the ES run that sets the --equal-steps budget")?;
         let budget = env_steps_of(&reference.dir)?;
+        budget_run = Some(reference.dir.clone());
         eprintln!(
             "equal steps: every run gets {budget} environment steps, measured on {}",
             reference.dir.display()
@@ -437,7 +444,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     for p in &plans {
         if run_state(&p.dir)? == RunState::Finished {
             check_config(p)?;
-            eprintln!("reusing finished run {}", p.dir.display());
+            if Some(&p.dir) != budget_run.as_ref() {
+                eprintln!("reusing finished run {}", p.dir.display());
+            }
         } else {
             pending.push(p.clone());
         }
@@ -517,9 +526,13 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             Preset::Smoke => "smoke",
         };
         let mut md = format!(
-            "# esrl compare: {} (preset {preset}, seeds 0..{})\n\n",
-            agents.iter().map(|a| a.name()).collect::<Vec<_>>().join(", "),
-            args.seeds
+            "# esrl compare: {} (preset {preset}, seeds 0 to {})\n\n",
+            agents
+                .iter()
+                .map(|a| a.name())
+                .collect::<Vec<_>>()
+                .join(", "),
+            args.seeds - 1
         );
         md.push_str("## Table 1\n\n");
         md.push_str(&table);

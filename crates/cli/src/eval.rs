@@ -120,10 +120,13 @@ pub fn load_run(path: &Path) -> Result<LoadedRun> {
     let config = TrainConfig::load(&run.join(RunDir::CONFIG))?;
     let (model, obs_dim, act_dim) = match config.env {
         EnvKind::Walk => {
-            let model = config.walk.load_model().with_context(|| match &config.walk.urdf {
-                Some(u) => format!("loading URDF {} named in the run config", u.display()),
-                None => "loading the embedded humanoid".into(),
-            })?;
+            let model = config
+                .walk
+                .load_model()
+                .with_context(|| match &config.walk.urdf {
+                    Some(u) => format!("loading URDF {} named in the run config", u.display()),
+                    None => "loading the embedded humanoid".into(),
+                })?;
             let env = WalkEnv::from_model(model.clone(), config.walk.clone())
                 .context("building the walking environment of the run config")?;
             let dims = (env.obs_dim(), env.act_dim());
@@ -142,7 +145,13 @@ pub fn load_run(path: &Path) -> Result<LoadedRun> {
         &config.rl,
         config.seed,
     )
-    .with_context(|| format!("building the {} agent of {}", config.agent.name(), run.display()))?;
+    .with_context(|| {
+        format!(
+            "building the {} agent of {}",
+            config.agent.name(),
+            run.display()
+        )
+    })?;
     checkpoint::load_agent(&ckpt, &mut agent)?;
     Ok(LoadedRun {
         run,
@@ -469,12 +478,15 @@ fn evaluate_episode(loaded: &LoadedRun, seed: u64, record: Option<&Path>) -> Res
                 )?),
                 None => None,
             };
-            let ep = walk_episode(&mut env, seed, act, |env, action, step| {
-                match &mut recorder {
+            let ep = walk_episode(
+                &mut env,
+                seed,
+                act,
+                |env, action, step| match &mut recorder {
                     Some(r) => r.frame(env, action, step),
                     None => Ok(()),
-                }
-            })?;
+                },
+            )?;
             if let Some(r) = recorder {
                 r.finish()?;
             }

@@ -24,8 +24,8 @@ use crate::eval::{walk_episode, LoadedRun};
 use anyhow::{bail, Context, Result};
 use esrl_agents::ActMode;
 use esrl_record::{
-    Frame, Geometry, LinkVisual, Pose, RecordOptions, RecordingStats, RolloutWriter,
-    ScalarTopic, Scene, Shape,
+    Frame, Geometry, LinkVisual, Pose, RecordOptions, RecordingStats, RolloutWriter, ScalarTopic,
+    Scene, Shape,
 };
 use esrl_sim::{Env, ShapeGeometry, Step, WalkEnv};
 use rand::SeedableRng;
@@ -65,7 +65,11 @@ fn link_colour(name: &str) -> [f64; 4] {
         } else {
             [0.35, 0.75, 0.4, 1.0]
         }
-    } else if foot || has(&["thigh", "shank", "shin", "calf", "leg", "hip", "knee", "ankle"]) {
+    } else if foot
+        || has(&[
+            "thigh", "shank", "shin", "calf", "leg", "hip", "knee", "ankle",
+        ])
+    {
         let base = if right {
             [0.85, 0.3, 0.25]
         } else if left {
@@ -184,7 +188,10 @@ impl Recorder {
     /// reward terms are only known then).
     pub fn create(path: &Path, env: &WalkEnv, metadata: BTreeMap<String, String>) -> Result<Self> {
         if path.is_dir() {
-            bail!("{} is a folder; give a file name such as run.mcap", path.display());
+            bail!(
+                "{} is a folder; give a file name such as run.mcap",
+                path.display()
+            );
         }
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -196,7 +203,10 @@ impl Recorder {
             .iter()
             .map(|l| {
                 names.iter().position(|n| *n == l.name).with_context(|| {
-                    format!("link `{}` has geometry but no pose in the simulation", l.name)
+                    format!(
+                        "link `{}` has geometry but no pose in the simulation",
+                        l.name
+                    )
                 })
             })
             .collect::<Result<Vec<_>>>()?;
@@ -252,9 +262,7 @@ impl Recorder {
                 .with_context(|| format!("creating {}", self.path.display()))?;
             self.writer = Some(w);
         }
-        self.writer
-            .as_mut()
-            .context("the recording was not opened")
+        self.writer.as_mut().context("the recording was not opened")
     }
 
     /// Records the step just taken by `env` with `action`.
@@ -297,10 +305,12 @@ impl Recorder {
             ],
         };
         let finite = frame.scalars.iter().flatten().all(|x| x.is_finite())
-            && frame
-                .link_poses
-                .iter()
-                .all(|p| p.translation.iter().chain(&p.rotation).all(|x| x.is_finite()));
+            && frame.link_poses.iter().all(|p| {
+                p.translation
+                    .iter()
+                    .chain(&p.rotation)
+                    .all(|x| x.is_finite())
+            });
         if !finite {
             self.skipped += 1;
             return Ok(());

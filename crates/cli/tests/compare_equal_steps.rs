@@ -51,7 +51,10 @@ fn equal_steps_uses_the_measured_es_budget() {
     let reference = dir.join("es-td3-s0");
     let budget = summary(&reference)["env_steps"].as_u64().unwrap();
     assert!(budget > 0);
-    assert!(err.contains(&format!("{budget} environment steps")), "{err}");
+    assert!(
+        err.contains(&format!("{budget} environment steps")),
+        "{err}"
+    );
     let md = std::fs::read_to_string(dir.join("table.md")).unwrap();
     assert!(md.contains(&format!("{budget} steps per run")), "{md}");
 

@@ -30,7 +30,11 @@ fn nauc(run: &Path) -> f64 {
     let curve: Vec<f64> = std::fs::read_to_string(run.join("metrics.jsonl"))
         .unwrap()
         .lines()
-        .map(|l| serde_json::from_str::<Value>(l).unwrap()["curve"].as_f64().unwrap())
+        .map(|l| {
+            serde_json::from_str::<Value>(l).unwrap()["curve"]
+                .as_f64()
+                .unwrap()
+        })
         .collect();
     curve.iter().sum::<f64>() / curve.len() as f64
 }
@@ -38,7 +42,12 @@ fn nauc(run: &Path) -> f64 {
 fn mtimes(dir: &Path) -> Vec<(String, SystemTime)> {
     let mut out = Vec::new();
     for run in ["es-sac-s0", "es-sac-s1", "sac-s0", "sac-s1"] {
-        for f in ["metrics.jsonl", "summary.json", "checkpoint/state.json", "eval.json"] {
+        for f in [
+            "metrics.jsonl",
+            "summary.json",
+            "checkpoint/state.json",
+            "eval.json",
+        ] {
             let p = dir.join(run).join(f);
             let t = std::fs::metadata(&p)
                 .and_then(|m| m.modified())
@@ -76,7 +85,10 @@ fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
     let md = std::fs::read_to_string(dir.join("table.md")).unwrap();
     let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| ")).collect();
     // Table 1 (header + 2 agents) and the actuator table (header + 2 agents).
-    assert_eq!(rows.iter().filter(|l| l.starts_with("| es-sac |")).count(), 2);
+    assert_eq!(
+        rows.iter().filter(|l| l.starts_with("| es-sac |")).count(),
+        2
+    );
     assert_eq!(rows.iter().filter(|l| l.starts_with("| sac |")).count(), 2);
     assert!(md.contains("Best-Win-50") && md.contains("Episodes-to-Target"));
 
@@ -89,10 +101,13 @@ fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
         let cells: Vec<&str> = line.split(',').collect();
         assert_eq!(cells[0], agent);
         assert_eq!(cells[col("seeds")], "2");
-        let want = (nauc(&dir.join(format!("{agent}-s0"))) + nauc(&dir.join(format!("{agent}-s1"))))
-            / 2.0;
+        let want =
+            (nauc(&dir.join(format!("{agent}-s0"))) + nauc(&dir.join(format!("{agent}-s1")))) / 2.0;
         let got: f64 = cells[col("nauc_mean")].parse().unwrap();
-        assert!((got - want).abs() < 1e-9 * (1.0 + want.abs()), "{agent}: {got} vs {want}");
+        assert!(
+            (got - want).abs() < 1e-9 * (1.0 + want.abs()),
+            "{agent}: {got} vs {want}"
+        );
         assert_eq!(cells[col("gait_runs")], "2", "both seeds evaluated");
         assert_eq!(cells[col("q0_mean_n")], "2");
     }
@@ -102,7 +117,11 @@ fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
     let err = String::from_utf8_lossy(&second.stderr);
     assert_eq!(err.matches("reusing finished run").count(), 4, "{err}");
     assert!(!err.contains("training "), "nothing retrained: {err}");
-    assert_eq!(mtimes(&dir), before, "finished runs and their evaluations are untouched");
+    assert_eq!(
+        mtimes(&dir),
+        before,
+        "finished runs and their evaluations are untouched"
+    );
     assert_eq!(String::from_utf8_lossy(&second.stdout), stdout);
     assert_eq!(std::fs::read_to_string(dir.join("table.csv")).unwrap(), csv);
 }
@@ -123,6 +142,9 @@ fn unknown_agents_are_refused() {
     assert_eq!(out.status.code(), Some(1));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("unknown agent `nonsense`"), "{err}");
-    assert!(err.contains("es-sac, es-td3, es-ddpg, sac, td3, ddpg"), "{err}");
+    assert!(
+        err.contains("es-sac, es-td3, es-ddpg, sac, td3, ddpg"),
+        "{err}"
+    );
     assert!(!dir.exists(), "nothing trained or written");
 }

@@ -25,14 +25,22 @@ fn train(agent: &str, dir: &Path, extra: &[&str]) {
     ];
     args.extend(extra);
     let out = esrl(&args);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
 
 /// Runs `args`, expects failure with every `needle` in stderr and no panic.
 fn fails(args: &[&str], needles: &[&str]) {
     let out = esrl(args);
     let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "esrl {args:?} should fail: {err}");
+    assert_eq!(
+        out.status.code(),
+        Some(1),
+        "esrl {args:?} should fail: {err}"
+    );
     assert!(!err.contains("panicked"), "esrl {args:?} panicked: {err}");
     for n in needles {
         assert!(err.contains(n), "esrl {args:?}: `{n}` not in: {err}");
@@ -47,7 +55,10 @@ fn bad_inputs_fail_cleanly() {
 
     fails(&["eval", &s(&t("missing"))], &["missing", "no such"]);
     std::fs::create_dir(t("empty")).unwrap();
-    fails(&["eval", &s(&t("empty"))], &["empty", "neither a run folder"]);
+    fails(
+        &["eval", &s(&t("empty"))],
+        &["empty", "neither a run folder"],
+    );
     fails(
         &["record", &s(&t("empty")), "--out", &s(&t("x.mcap"))],
         &["neither a run folder"],

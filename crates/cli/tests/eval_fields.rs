@@ -89,7 +89,10 @@ fn eval_json_has_every_field_and_agrees_with_its_trace() {
         rec.to_str().unwrap(),
     ]);
     let table = String::from_utf8_lossy(&out.stdout);
-    assert!(table.contains("left_knee"), "table lists actuators:\n{table}");
+    assert!(
+        table.contains("left_knee"),
+        "table lists actuators:\n{table}"
+    );
     let eval = read_json(&run.join("eval.json"));
     assert_eq!(eval["agent"], "es-sac");
     assert!(eval["run"].as_str().unwrap().ends_with("run"));
@@ -124,10 +127,16 @@ fn eval_json_has_every_field_and_agrees_with_its_trace() {
         let lat = mean(&y.iter().map(|v| v.abs()).collect::<Vec<_>>());
         assert!(close(g["mean_abs_lateral"].as_f64().unwrap(), lat));
         assert!(close(g["mean_vertical"].as_f64().unwrap(), mean(&z)));
-        assert!(close(g["mean_forward_velocity"].as_f64().unwrap(), mean(&v)));
+        assert!(close(
+            g["mean_forward_velocity"].as_f64().unwrap(),
+            mean(&v)
+        ));
         let tau = floats(&g["mean_abs_torque"]);
         assert_eq!(tau.len(), 6);
-        assert!(close(g["mean_abs_torque_overall"].as_f64().unwrap(), mean(&tau)));
+        assert!(close(
+            g["mean_abs_torque_overall"].as_f64().unwrap(),
+            mean(&tau)
+        ));
         // A 1 s smoke episode cannot cover 50 m.
         assert!(g["track_time"].is_null());
         let ended = e["terminated"].as_bool().unwrap() || e["truncated"].as_bool().unwrap();
@@ -136,7 +145,10 @@ fn eval_json_has_every_field_and_agrees_with_its_trace() {
         assert!(rec.join(format!("episode-{k:03}.mcap")).is_file());
     }
     let m = &eval["mean"];
-    let returns: Vec<f64> = episodes.iter().map(|e| e["return"].as_f64().unwrap()).collect();
+    let returns: Vec<f64> = episodes
+        .iter()
+        .map(|e| e["return"].as_f64().unwrap())
+        .collect();
     assert!((m["return"].as_f64().unwrap() - mean(&returns)).abs() < 1e-9);
     assert_eq!(m["episodes"].as_u64(), Some(2));
     for key in ["return_sd", "length", "q0", "falls", "finished", "gait"] {
@@ -185,11 +197,23 @@ fn pendulum_eval_has_returns_only() {
     for e in eval["episodes"].as_array().unwrap() {
         assert!(e["gait"].is_null());
         assert!(e.get("trace").is_none());
-        assert_eq!(e["length"].as_u64(), Some(200), "Pendulum-v1 truncates at 200");
-        assert!(e["return"].as_f64().unwrap() < 0.0, "pendulum rewards are ≤ 0");
+        assert_eq!(
+            e["length"].as_u64(),
+            Some(200),
+            "Pendulum-v1 truncates at 200"
+        );
+        assert!(
+            e["return"].as_f64().unwrap() < 0.0,
+            "pendulum rewards are ≤ 0"
+        );
     }
     assert!(eval["mean"]["gait"].is_null());
-    let out = esrl(&["eval", r, "--record", tmp.path().join("rec").to_str().unwrap()]);
+    let out = esrl(&[
+        "eval",
+        r,
+        "--record",
+        tmp.path().join("rec").to_str().unwrap(),
+    ]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("pendulum"));
 }

@@ -28,13 +28,29 @@ fn zero_torque_falls_and_never_finishes() {
     assert!(!ep.rollout.truncated);
     assert!(ep.rollout.length < max, "fell before the time limit");
     assert_eq!(ep.rollout.length, steps, "on_step sees every step");
-    let g = ep.metrics(50.0).unwrap().expect("finite samples were logged");
+    let g = ep
+        .metrics(50.0)
+        .unwrap()
+        .expect("finite samples were logged");
     assert!(g.fell);
     assert_eq!(g.track_time, None);
     assert_eq!(g.steps, ep.rollout.length);
-    assert!(g.distance.abs() < 1.0, "a fall does not walk: {} m", g.distance);
-    assert_eq!(g.mean_abs_torque_overall, 0.0, "zero actions apply no torque");
+    assert!(
+        g.distance.abs() < 1.0,
+        "a fall does not walk: {} m",
+        g.distance
+    );
+    assert_eq!(
+        g.mean_abs_torque_overall, 0.0,
+        "zero actions apply no torque"
+    );
     assert_eq!(g.mean_abs_power_overall, 0.0);
-    assert_eq!(g.knee_torque_asymmetry, 0.0, "both knees at 0 are symmetric");
-    assert!(g.mean_vertical < 0.0, "the torso ends below its standing height");
+    assert_eq!(
+        g.knee_torque_asymmetry, 0.0,
+        "both knees at 0 are symmetric"
+    );
+    assert!(
+        g.mean_vertical < 0.0,
+        "the torso ends below its standing height"
+    );
 }

@@ -58,7 +58,15 @@ fn recording_reads_back_with_foxglove_schemas() {
     let tmp = tempfile::tempdir().unwrap();
     let run = tmp.path().join("run");
     let r = run.to_str().unwrap();
-    ok(&["train", "td3", "--preset", "smoke", "--out", r, "--no-progress"]);
+    ok(&[
+        "train",
+        "td3",
+        "--preset",
+        "smoke",
+        "--out",
+        r,
+        "--no-progress",
+    ]);
     let file = tmp.path().join("sub/rollout.mcap");
     ok(&["record", r, "--out", file.to_str().unwrap(), "--seed", "5"]);
     ok(&["eval", r, "--seed", "5"]);
@@ -142,7 +150,14 @@ fn recording_reads_back_with_foxglove_schemas() {
     let torque = read_scalars(&bytes, "/esrl/joints/torque").unwrap();
     assert_eq!(
         torque.fields,
-        ["left_hip", "left_knee", "left_ankle", "right_hip", "right_knee", "right_ankle"]
+        [
+            "left_hip",
+            "left_knee",
+            "left_ankle",
+            "right_hip",
+            "right_knee",
+            "right_ankle"
+        ]
     );
     let reward = read_scalars(&bytes, "/esrl/reward").unwrap();
     assert_eq!(
@@ -152,11 +167,18 @@ fn recording_reads_back_with_foxglove_schemas() {
     let mut ret = 0.0;
     for row in &reward.values {
         let terms: f64 = row[1..].iter().sum();
-        assert!((terms - row[0]).abs() < 1e-5, "terms {terms} vs total {}", row[0]);
+        assert!(
+            (terms - row[0]).abs() < 1e-5,
+            "terms {terms} vs total {}",
+            row[0]
+        );
         ret += row[0];
     }
     let eval_ret = eval["episodes"][0]["return"].as_f64().unwrap();
-    assert!((ret - eval_ret).abs() < 1e-6 * (1.0 + eval_ret.abs()), "{ret} vs {eval_ret}");
+    assert!(
+        (ret - eval_ret).abs() < 1e-6 * (1.0 + eval_ret.abs()),
+        "{ret} vs {eval_ret}"
+    );
     let torso = read_scalars(&bytes, "/esrl/torso").unwrap();
     let x_last = torso.values.last().unwrap()[0];
     let trace_x = eval["episodes"][0]["trace"]["x"].as_array().unwrap();
