@@ -13,13 +13,14 @@
 //! Errors become `ValueError`, `FileNotFoundError`/`OSError` or `esrl_rs.EsrlError` with the
 //! Rust message (see `errors`); simulator panics are caught and raised as `EsrlError`.
 //!
-//! Limitations: loading a run's policy weights is not bound yet (the checkpoint format of the
-//! CLI is still being written).
+//! - `PolicyCore`: a trained policy from a run's checkpoint (via the `esrl` CLI library),
+//!   acting and rolling out deterministically like `esrl eval`.
 
 mod convert;
 mod envs;
 mod errors;
 mod metrics;
+mod policy;
 mod recording;
 mod run;
 
@@ -35,6 +36,7 @@ fn native(module: &Bound<'_, PyModule>) -> PyResult<()> {
     run::register(module)?;
     recording::register(module)?;
     envs::register(module)?;
+    policy::register(module)?;
     let metrics = PyModule::new(py, "metrics")?;
     metrics::register(&metrics)?;
     module.add_submodule(&metrics)?;

@@ -59,6 +59,21 @@ def cli_train(esrl_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> Calla
     return train
 
 
+@pytest.fixture(scope="session")
+def cli_eval(esrl_bin: Path) -> Callable[..., Dict[str, Any]]:
+    """Runs `esrl eval RUN --episodes K` and returns the eval.json it wrote."""
+
+    def evaluate(run: Path, episodes: int = 1) -> Dict[str, Any]:
+        cmd = [str(esrl_bin), "eval", str(run), "--episodes", str(episodes)]
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+        if proc.returncode != 0 or not (run / "eval.json").is_file():
+            no_cli(f"`{' '.join(cmd)}` did not write eval.json (exit {proc.returncode}): "
+                   f"{proc.stderr.strip()[-500:]}")
+        return json.loads((run / "eval.json").read_text(encoding="utf-8"))
+
+    return evaluate
+
+
 def write_run(
     root: Path,
     agent: str,

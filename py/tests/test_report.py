@@ -77,6 +77,25 @@ def test_report_from_two_cli_runs(cli_train: Callable[..., Path], tmp_path: Path
     assert "| es-sac | 1 |" in md and "| sac | 1 |" in md
 
 
+def test_report_from_two_evaluated_cli_runs(cli_train: Callable[..., Path],
+                                            cli_eval: Callable[..., dict],
+                                            tmp_path: Path) -> None:
+    import shutil
+    runs = []
+    for seed in ("0", "1"):
+        run = shutil.copytree(cli_train("es-sac", "--preset", "smoke", "--seed", seed),
+                              tmp_path / f"es-sac-{seed}")
+        cli_eval(run, 2)
+        runs.append(run)
+    out = tmp_path / "walk-report"
+    r = report.render_report(runs, out, dpi=60)
+    assert r.notes == []
+    assert _files(out) == sorted(ALL_PANELS + ["table1.csv", "table1.md"])
+    _check_pngs(out, ALL_PANELS)
+    md = (out / "table1.md").read_text(encoding="utf-8")
+    assert "| es-sac | 2 |" in md and "left_knee" in md
+
+
 def test_report_bad_path(tmp_path: Path) -> None:
     with pytest.raises(FileNotFoundError):
         report.render_report([tmp_path / "missing"], tmp_path / "out")

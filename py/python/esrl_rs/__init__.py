@@ -27,16 +27,19 @@ from ._native import (
     recording_channels,
     write_recording,
 )
+from .policy import Policy, load_policy
 from .run import Run, group_by_agent, load_run, load_runs
 
 __all__ = [
     "EsrlError",
     "Pendulum",
+    "Policy",
     "Run",
     "WalkEnv",
     "__version__",
     "group_by_agent",
     "load_eval",
+    "load_policy",
     "load_run",
     "load_runs",
     "metrics",

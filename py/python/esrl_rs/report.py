@@ -16,7 +16,7 @@ Runs are grouped by agent (``config.toml`` key ``agent``). Writes to ``DIR``:
 A panel without data is left out with a note (printed, and listed in ``table1.md``). The
 numbers come from ``esrl-metrics`` through the bindings: the per-seed summaries are computed
 against each agent's own target (80% of the median Best-Win-50 over its seeds), the gait
-columns from the first episode of each run's ``eval.json``. Colours follow the paper: ES-SAC
+columns from each run's ``eval.json`` (its mean over episodes, else its first episode). Colours follow the paper: ES-SAC
 blue, ES-TD3 orange, ES-DDPG yellow, SAC purple, TD3 green, DDPG cyan (MATLAB's default
 colour order); other agents get matplotlib's defaults.
 """
@@ -97,22 +97,29 @@ def _q0_mean(run: Run) -> Optional[float]:
     return float(q0.mean()) if q0.size else None
 
 
-def _first_gait(run: Run) -> Optional[Dict[str, Any]]:
+def _seed_gait(run: Run) -> Optional[Dict[str, Any]]:
+    """The run's gait metrics: ``eval.json``'s mean over episodes when present (``esrl eval``
+    writes it), else its first episode's."""
     ev = run.eval
-    if not ev or not ev.get("episodes"):
+    if not ev:
         return None
-    gait = ev["episodes"][0].get("gait")
+    mean = ev.get("mean")
+    if isinstance(mean, dict) and isinstance(mean.get("gait"), dict):
+        return mean["gait"]
+    episodes = ev.get("episodes") or []
+    gait = episodes[0].get("gait") if episodes else None
     return gait if isinstance(gait, dict) else None
 
 
 def agent_runs(groups: Dict[str, List[Run]]) -> List[Dict[str, Any]]:
     """The input of the Table 1 functions of :mod:`esrl_rs.metrics`: per agent, each seed's
     curve summary (against the agent's target, by ``summarize_method``), the gait metrics of
-    its first evaluation episode and its mean Q0."""
+    its evaluation (``eval.json``: the mean over episodes, else the first episode) and its
+    mean Q0."""
     out = []
     for agent, runs in groups.items():
         summaries = metrics.summarize_method([r.curve for r in runs])
-        seeds = [{"summary": s, "gait": _first_gait(r), "q0_mean": _q0_mean(r)}
+        seeds = [{"summary": s, "gait": _seed_gait(r), "q0_mean": _q0_mean(r)}
                  for r, s in zip(runs, summaries)]
         out.append({"agent": agent, "seeds": seeds})
     return out

@@ -1,0 +1,95 @@
+"""Trained policies from CLI runs: loading, deterministic acting, rollouts that agree with a
+Python loop over the Gymnasium env and with `esrl eval`'s eval.json."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+import pytest
+
+import esrl_rs
+
+PENDULUM = ("--env", "pendulum", "--preset", "smoke", "--episodes", "60", "--seed", "3")
+WALK = ("--preset", "smoke", "--seed", "2")
+
+
+def test_policy_rollout_matches_a_python_loop(cli_train: Callable[..., Path]) -> None:
+    policy = esrl_rs.load_policy(cli_train("sac", *PENDULUM))
+    assert policy.agent == "sac" and policy.env == "pendulum"
+    assert policy.obs_dim == 3 and policy.act_dim == 1
+    env = policy.make_env()
+    for seed in (0, 5):
+        r = policy.rollout(seed)
+        obs, _ = env.reset(seed=seed)
+        policy.reset()
+        q0 = policy.q0(obs)
+        ret, length, done = 0.0, 0, False
+        while not done:
+            a = policy.act(obs)
+            assert a.dtype == np.float32 and np.all(np.abs(a) <= 1.0)
+            obs, reward, terminated, truncated, _ = env.step(a)
+            ret += reward
+            length += 1
+            done = terminated or truncated
+        assert r["return"] == ret and r["length"] == length == 200
+        assert r["q0"] == q0 and r["truncated"] and not r["terminated"]
+    # deterministic
+    assert policy.rollout(0) == policy.rollout(0)
+
+
+def test_policy_matches_esrl_eval(cli_train: Callable[..., Path],
+                                  cli_eval: Callable[..., dict], tmp_path: Path) -> None:
+    import shutil
+    for args in (PENDULUM, WALK):
+        run = shutil.copytree(cli_train("sac" if args is PENDULUM else "es-sac", *args),
+                              tmp_path / f"run-{len(args)}")
+        ev = cli_eval(run, 2)
+        mine = esrl_rs.load_policy(run).evaluate(episodes=2, seed=0)
+        loaded = esrl_rs.load_eval(run)
+        for theirs, ours, typed in zip(ev["episodes"], mine["episodes"], loaded["episodes"]):
+            assert ours["seed"] == theirs["seed"]
+            assert ours["return"] == theirs["return"]
+            assert ours["length"] == theirs["length"]
+            assert ours["q0"] == pytest.approx(theirs["q0"], rel=1e-12)
+            if theirs.get("trace"):
+                np.testing.assert_array_equal(ours["trace"]["x"], theirs["trace"]["x"])
+                np.testing.assert_array_equal(ours["trace"]["y"], typed["trace"]["y"])
+                np.testing.assert_allclose(ours["gait"]["mean_abs_power"],
+                                           theirs["gait"]["mean_abs_power"], rtol=1e-12)
+
+
+def test_walk_policy(cli_train: Callable[..., Path]) -> None:
+    policy = esrl_rs.load_policy(cli_train("es-sac", *WALK) / "checkpoint")
+    assert policy.agent == "es-sac" and policy.env == "walk"
+    assert (policy.obs_dim, policy.act_dim) == (43, 6)
+    r = policy.rollout(1)
+    n = r["length"]
+    assert r["trace"]["x"].shape == (n,) and r["gait"]["steps"] == n
+    assert r["gait"]["actuator_names"][1] == "left_knee"
+    env = policy.make_env()
+    assert env.max_episode_steps == n or r["terminated"]
+
+
+def test_policy_errors(tmp_path: Path) -> None:
+    with pytest.raises(FileNotFoundError, match="no such run or checkpoint folder"):
+        esrl_rs.load_policy(tmp_path / "none")
+    (tmp_path / "run").mkdir()
+    (tmp_path / "run" / "config.toml").write_text('agent = "sac"\n')
+    with pytest.raises(FileNotFoundError, match="no complete checkpoint"):
+        esrl_rs.load_policy(tmp_path / "run")
+    with pytest.raises(ValueError, match="neither a run folder"):
+        esrl_rs.load_policy(tmp_path)
+
+
+def test_policy_bad_config_and_obs(cli_train: Callable[..., Path], tmp_path: Path) -> None:
+    import shutil
+    run = shutil.copytree(cli_train("sac", *PENDULUM), tmp_path / "run")
+    policy = esrl_rs.load_policy(run)
+    with pytest.raises(ValueError, match="obs: length 2, expected 3"):
+        policy.act([0.0, 1.0])
+    text = (run / "config.toml").read_text()
+    (run / "config.toml").write_text(text.replace('agent = "sac"', 'agent = "nope"'))
+    with pytest.raises(ValueError, match="config.toml"):
+        esrl_rs.load_policy(run)
