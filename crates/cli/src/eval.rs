@@ -88,7 +88,7 @@ pub fn locate(path: &Path) -> Result<(PathBuf, PathBuf)> {
         let ckpt = checkpoint::find(path).with_context(|| {
             format!(
                 "{} has no complete checkpoint (checkpoint/ with state.json and \
-                 agent.safetensors): the run did not reach its first checkpoint",
+                 agent.safetensors); a run killed before its first checkpoint has none",
                 path.display()
             )
         })?;
