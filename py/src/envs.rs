@@ -39,23 +39,43 @@ pub struct EnvCore {
     config: serde_json::Value,
 }
 
-fn guarded<T>(what: &str, f: impl FnOnce() -> T) -> PyResult<T> {
-    catch_unwind(AssertUnwindSafe(f)).map_err(|payload| {
-        esrl_error(format!(
-            "the simulator panicked during {what}: {}; call reset() before stepping again",
-            panic_message(payload.as_ref())
-        ))
-    })
+/// Runs `f`, turning a panic into its message.
+fn guarded<T>(f: impl FnOnce() -> T) -> Result<T, String> {
+    catch_unwind(AssertUnwindSafe(f)).map_err(|payload| panic_message(payload.as_ref()))
+}
+
+fn panicked(what: &str, message: &str) -> PyErr {
+    esrl_error(format!(
+        "the simulator panicked during {what}: {message}; call reset() before stepping again"
+    ))
+}
+
+/// Why a step could not run (built without the GIL, turned into exceptions with it).
+enum StepFailure {
+    NeedsReset,
+    Poisoned,
+    Panic(String),
 }
 
 impl EnvCore {
-    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Task>> {
-        self.task.lock().map_err(|_| {
-            esrl_error(format!(
+    /// Locks the environment. Called only while detached from the interpreter, and the guard
+    /// never outlives the detached section, so a thread waiting for the lock never holds the
+    /// GIL that the lock's holder needs (no deadlock between Python threads).
+    fn lock(&self) -> Result<std::sync::MutexGuard<'_, Task>, StepFailure> {
+        self.task.lock().map_err(|_| StepFailure::Poisoned)
+    }
+
+    fn failure(&self, what: &str, f: StepFailure) -> PyErr {
+        match f {
+            StepFailure::NeedsReset => {
+                esrl_error(format!("{}: call reset() before step()", self.name))
+            }
+            StepFailure::Poisoned => esrl_error(format!(
                 "{} environment is poisoned by an earlier panic",
                 self.name
-            ))
-        })
+            )),
+            StepFailure::Panic(m) => panicked(what, &m),
+        }
     }
 }
 
@@ -71,7 +91,9 @@ impl EnvCore {
             _ => WalkConfig::default(),
         };
         let json = serde_json::to_value(&config).map_err(|e| value_error(e.to_string()))?;
-        let env = guarded("construction", || WalkEnv::new(config))?.map_err(sim_error)?;
+        let env = guarded(|| WalkEnv::new(config))
+            .map_err(|m| panicked("construction", &m))?
+            .map_err(sim_error)?;
         Ok(Self {
             name: "walk",
             obs_dim: env.obs_dim(),
@@ -166,10 +188,14 @@ impl EnvCore {
 
     /// Resets with `seed` and returns the first observation (float32).
     fn reset<'py>(&self, py: Python<'py>, seed: u64) -> PyResult<Bound<'py, PyArray1<f32>>> {
-        let mut task = self.lock()?;
-        let task = &mut *task;
-        let obs = py.detach(|| guarded("reset", || task.env.reset(seed)))?;
-        task.needs_reset = false;
+        let obs = py
+            .detach(|| {
+                let mut task = self.lock()?;
+                let obs = guarded(|| task.env.reset(seed)).map_err(StepFailure::Panic)?;
+                task.needs_reset = false;
+                Ok(obs)
+            })
+            .map_err(|f| self.failure("reset", f))?;
         Ok(PyArray1::from_vec(py, obs))
     }
 
@@ -189,21 +215,18 @@ impl EnvCore {
                 self.action_names.join(", ")
             )));
         }
-        let mut task = self.lock()?;
-        let task = &mut *task;
-        if task.needs_reset {
-            return Err(esrl_error(format!(
-                "{}: call reset() before step()",
-                self.name
-            )));
-        }
-        let step = match py.detach(|| guarded("step", || task.env.step(&action))) {
-            Ok(step) => step,
-            Err(e) => {
-                task.needs_reset = true;
-                return Err(e);
-            }
-        };
+        let step = py
+            .detach(|| {
+                let mut task = self.lock()?;
+                if task.needs_reset {
+                    return Err(StepFailure::NeedsReset);
+                }
+                guarded(|| task.env.step(&action)).map_err(|m| {
+                    task.needs_reset = true;
+                    StepFailure::Panic(m)
+                })
+            })
+            .map_err(|f| self.failure("step", f))?;
         let info = PyDict::new(py);
         let terms = PyDict::new(py);
         for (name, value) in &step.info.reward_terms {

@@ -92,6 +92,8 @@ impl PolicyCore {
         })
     }
 
+    /// Locks the agent for a short, GIL-holding call (`act`, `q0`, `reset`). Safe against
+    /// deadlock because `rollout` takes and releases the lock entirely without the GIL.
     fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Inner>> {
         self.inner
             .lock()
@@ -249,24 +251,24 @@ impl PolicyCore {
     /// metrics of esrl-metrics on the run's track length).
     fn rollout<'py>(&self, py: Python<'py>, seed: u64) -> PyResult<Bound<'py, PyDict>> {
         let mut env = self.make_env()?;
-        let mut guard = self.lock()?;
-        let inner = &mut *guard;
         let walk = self.config.env == EnvKind::Walk;
         let names = (
             self.config.walk.actuated_joints.clone(),
             self.config.walk.foot_links.to_vec(),
         );
-        let result = py.detach(|| {
-            std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                rollout(&mut *env, inner, seed, walk.then_some(names))
-            }))
-        });
-        let r = result.map_err(|p| {
-            esrl_error(format!(
-                "the simulator panicked during a rollout: {}",
-                panic_message(p.as_ref())
-            ))
-        })?;
+        // The lock is taken and released without the GIL (see `lock`).
+        let r = py
+            .detach(|| {
+                let mut guard = self.inner.lock().map_err(|_| None)?;
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    rollout(&mut *env, &mut guard, seed, walk.then_some(names))
+                }))
+                .map_err(|p| Some(panic_message(p.as_ref())))
+            })
+            .map_err(|e| match e {
+                None => esrl_error("policy is poisoned by an earlier panic"),
+                Some(m) => esrl_error(format!("the simulator panicked during a rollout: {m}")),
+            })?;
         let out = PyDict::new(py);
         out.set_item("seed", seed)?;
         out.set_item("return", r.ret)?;

@@ -93,3 +93,16 @@ def test_policy_bad_config_and_obs(cli_train: Callable[..., Path], tmp_path: Pat
     (run / "config.toml").write_text(text.replace('agent = "sac"', 'agent = "nope"'))
     with pytest.raises(ValueError, match="config.toml"):
         esrl_rs.load_policy(run)
+
+
+def test_policy_shared_by_threads(cli_train: Callable[..., Path]) -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    policy = esrl_rs.load_policy(cli_train("sac", *PENDULUM))
+    expected = policy.rollout(0)
+    obs = np.zeros(3, dtype=np.float32)
+    with ThreadPoolExecutor(4) as pool:
+        jobs = [pool.submit(policy.rollout, 0) for _ in range(3)]
+        jobs += [pool.submit(policy.act, obs) for _ in range(20)]
+        done = [j.result(timeout=120) for j in jobs]
+    assert all(d == expected for d in done[:3])

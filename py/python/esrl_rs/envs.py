@@ -28,7 +28,7 @@ __all__ = ["Pendulum", "WalkEnv"]
 _SEED_BOUND = 2**63 - 1
 
 
-class _RustEnv(gym.Env):  # type: ignore[type-arg]
+class _RustEnv(gym.Env[np.ndarray, np.ndarray]):
     """A Gymnasium ``Env`` around an ``EnvCore``."""
 
     metadata: Dict[str, Any] = {"render_modes": []}

@@ -104,8 +104,10 @@ def _seed_gait(run: Run) -> Optional[Dict[str, Any]]:
     if not ev:
         return None
     mean = ev.get("mean")
-    if isinstance(mean, dict) and isinstance(mean.get("gait"), dict):
-        return mean["gait"]
+    if isinstance(mean, dict):
+        gait = mean.get("gait")
+        if isinstance(gait, dict):
+            return gait
     episodes = ev.get("episodes") or []
     gait = episodes[0].get("gait") if episodes else None
     return gait if isinstance(gait, dict) else None
