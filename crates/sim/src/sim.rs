@@ -380,6 +380,12 @@ impl RobotSim {
             }
         }
 
+        // A zero-length step applies the pending changes (mass properties, collision pairs)
+        // so that the world can be queried before its first real step.
+        world.integration_parameters.dt = 0.0;
+        world.step();
+        world.integration_parameters.dt = setup.dt;
+
         Self {
             root_shift: Vector::new(shift[0] as f32, shift[1] as f32, shift[2] as f32),
             world,

@@ -375,6 +375,12 @@ impl WalkEnv {
     pub fn from_model(model: Arc<RobotModel>, config: WalkConfig) -> Result<Self, SimError> {
         config.validate()?;
         let torso = model.root();
+        if model.links()[torso].mass <= 0.0 {
+            return Err(crate::error::UrdfError::MasslessFloatingRoot {
+                link: model.links()[torso].name.clone(),
+            }
+            .into());
+        }
         let mut actuated = Vec::with_capacity(config.actuated_joints.len());
         for name in &config.actuated_joints {
             let Some(j) = model.joint_index(name) else {
