@@ -1,16 +1,21 @@
-//! Prints `esrl_nn::bench::run` results: `cargo run --release -p esrl-nn --example nn_bench [obs_dim] [reps]`.
+//! Prints `esrl_nn::bench::run` as one JSON line (what `esrl bench nn --json` prints):
+//! `cargo run --release -p esrl-nn --example nn_bench -- [obs_dim] [reps] [--no-sac]`.
 
 fn main() {
-    let mut args = std::env::args().skip(1);
+    let args: Vec<String> = std::env::args().skip(1).collect();
     let mut cfg = esrl_nn::bench::BenchConfig::default();
-    if let Some(v) = args.next().and_then(|s| s.parse().ok()) {
+    let nums: Vec<usize> = args.iter().filter_map(|s| s.parse().ok()).collect();
+    if let Some(&v) = nums.first() {
         cfg.obs_dim = v;
     }
-    if let Some(v) = args.next().and_then(|s| s.parse().ok()) {
+    if let Some(&v) = nums.get(1) {
         cfg.reps = v;
     }
+    if args.iter().any(|a| a == "--no-sac") {
+        cfg.sac_update = false;
+    }
     match esrl_nn::bench::run(&cfg) {
-        Ok(r) => println!("{r:#?}"),
+        Ok(r) => println!("{}", serde_json::to_string(&r).unwrap_or_default()),
         Err(e) => {
             eprintln!("error: {e}");
             std::process::exit(1);

@@ -17,41 +17,46 @@ pub(crate) enum Tr {
 }
 
 /// Row-major view of `op(a)` with logical shape `(rows, cols)` where `a` is stored row-major
-/// as `(rows, cols)` for [`Tr::N`] or `(cols, rows)` for [`Tr::T`].
+/// with row stride `ld` as `(rows, cols)` for [`Tr::N`] or `(cols, rows)` for [`Tr::T`].
 #[inline]
-fn view(a: &[f32], rows: usize, cols: usize, t: Tr) -> MatRef<'_, f32> {
+fn view(a: &[f32], rows: usize, cols: usize, ld: usize, t: Tr) -> MatRef<'_, f32> {
+    let (r, c) = match t {
+        Tr::N => (rows, cols),
+        Tr::T => (cols, rows),
+    };
+    let need = if r == 0 || c == 0 {
+        0
+    } else {
+        (r - 1) * ld + c
+    };
+    let m = MatRef::from_row_major_slice_with_stride(&a[..need], r, c, ld);
     match t {
-        Tr::N => MatRef::from_row_major_slice(&a[..rows * cols], rows, cols),
-        Tr::T => MatRef::from_row_major_slice(&a[..rows * cols], cols, rows).transpose(),
+        Tr::N => m,
+        Tr::T => m.transpose(),
     }
 }
 
-/// `dst (m, n) = [dst +] op(a) (m, k) · op(b) (k, n)`, everything row-major.
-///
-/// `dst` is a row-major `(m, n)` block with row stride `ldd` (≥ n), so a product can write
-/// into a column block of a wider matrix.
+/// `dst (m, n) = [dst +] op(a) (m, k) · op(b) (k, n)`, all row-major with row strides
+/// `ldd`, `lda`, `ldb` (so operands and results can be column blocks of wider matrices).
 #[allow(clippy::too_many_arguments)]
 #[inline]
-pub(crate) fn gemm_strided(
+pub(crate) fn gemm_ex(
     dst: &mut [f32],
     ldd: usize,
     m: usize,
     n: usize,
     k: usize,
     a: &[f32],
+    lda: usize,
     ta: Tr,
     b: &[f32],
+    ldb: usize,
     tb: Tr,
     accumulate: bool,
 ) {
     if m == 0 || n == 0 {
         return;
     }
-    let beta = if accumulate {
-        Accum::Add
-    } else {
-        Accum::Replace
-    };
     if k == 0 {
         if !accumulate {
             for r in 0..m {
@@ -60,6 +65,11 @@ pub(crate) fn gemm_strided(
         }
         return;
     }
+    let beta = if accumulate {
+        Accum::Add
+    } else {
+        Accum::Replace
+    };
     let need = (m - 1) * ldd + n;
     // faer 0.24.4's `MatMut::from_row_major_slice_with_stride_mut` builds column-major
     // strides (and then writes out of bounds); the transposed column-major view is correct.
@@ -68,14 +78,14 @@ pub(crate) fn gemm_strided(
     matmul(
         d,
         beta,
-        view(a, m, k, ta),
-        view(b, k, n, tb),
+        view(a, m, k, lda, ta),
+        view(b, k, n, ldb, tb),
         1.0f32,
         Par::Seq,
     );
 }
 
-/// `dst (m, n) = [dst +] op(a) (m, k) · op(b) (k, n)` with a contiguous `dst`.
+/// `dst (m, n) = [dst +] op(a) (m, k) · op(b) (k, n)`, all contiguous.
 #[allow(clippy::too_many_arguments)]
 #[inline]
 pub(crate) fn gemm(
@@ -89,7 +99,9 @@ pub(crate) fn gemm(
     tb: Tr,
     accumulate: bool,
 ) {
-    gemm_strided(dst, n, m, n, k, a, ta, b, tb, accumulate);
+    let lda = if ta == Tr::N { k } else { m };
+    let ldb = if tb == Tr::N { n } else { k };
+    gemm_ex(dst, n, m, n, k, a, lda, ta, b, ldb, tb, accumulate);
 }
 
 #[cfg(test)]
@@ -118,6 +130,45 @@ mod tests {
             }
         }
         out
+    }
+
+    #[test]
+    fn strided_blocks_match_naive() {
+        // C[:, 1..4] += A[:, 2..5] · B[1..4, :]ᵀ-stored, inside wider matrices.
+        let (m, n, k) = (5, 3, 3);
+        let a: Vec<f32> = (0..m * 7).map(|i| (i % 9) as f32 * 0.3 - 1.0).collect();
+        let b: Vec<f32> = (0..6 * 8).map(|i| (i % 5) as f32 * 0.2 - 0.4).collect();
+        let mut c = vec![0.5f32; m * 6];
+        gemm_ex(
+            &mut c[1..],
+            6,
+            m,
+            n,
+            k,
+            &a[2..],
+            7,
+            Tr::N,
+            &b[8 + 1..],
+            8,
+            Tr::T,
+            true,
+        );
+        for i in 0..m {
+            for j in 0..6 {
+                let want = if (1..4).contains(&j) {
+                    0.5 + (0..k)
+                        .map(|l| a[i * 7 + 2 + l] * b[(1 + j - 1) * 8 + 1 + l])
+                        .sum::<f32>()
+                } else {
+                    0.5
+                };
+                assert!(
+                    (c[i * 6 + j] - want).abs() < 1e-5,
+                    "({i},{j}) {} vs {want}",
+                    c[i * 6 + j]
+                );
+            }
+        }
     }
 
     #[test]

@@ -12,7 +12,6 @@
 //! mutates the weights.
 
 use crate::ops::lstm::LstmNode;
-use crate::ops::Act;
 use crate::params::Params;
 use crate::tensor::Tensor;
 
@@ -53,14 +52,8 @@ pub(crate) enum Op {
         set: usize,
         offset: usize,
     },
-    /// `y = act(x·Wᵀ + b)`.
-    Linear {
-        x: Var,
-        set: usize,
-        w: usize,
-        b: usize,
-        act: Act,
-    },
+    /// `y = act([x₁ | x₂ | …]·Wᵀ + b)`.
+    Linear(Box<crate::ops::linear::LinearNode>),
     /// A whole LSTM sequence.
     Lstm(Box<LstmNode>),
     Unary {
@@ -359,6 +352,22 @@ impl<'g, 'a> BackCtx<'g, 'a> {
         }
         let (r, c) = self.nodes[v.0].value.shape();
         Some(self.grads[v.0].get_or_insert_with(|| Tensor::zeros(r, c)))
+    }
+
+    /// Like [`BackCtx::grad`], but a first use returns an *unwritten* buffer and `true`: the
+    /// caller must then overwrite every element instead of accumulating (saves a memset and
+    /// a read pass for large input gradients).
+    #[inline]
+    pub(crate) fn grad_fresh(&mut self, v: Var) -> Option<(&mut Tensor, bool)> {
+        if !self.nodes[v.0].requires_grad {
+            return None;
+        }
+        let fresh = self.grads[v.0].is_none();
+        let (r, c) = self.nodes[v.0].value.shape();
+        Some((
+            self.grads[v.0].get_or_insert_with(|| Tensor::uninit(r, c)),
+            fresh,
+        ))
     }
 
     /// Parameter values and gradient accumulator of a binding (`None` when frozen).

@@ -3,7 +3,7 @@
 //! `std`'s `exp` is a library call that stops auto-vectorisation; the LSTM gates need millions
 //! of sigmoids and tanhs per update, so [`exp`] here is a Cephes-style polynomial made only of
 //! multiplies, adds and bit casts (no FMA, so the result is the same on every code path).
-//! [`simd`] runs a closure inside `pulp`'s runtime dispatch so its loops are compiled for the
+//! [`simd_fn!`] compiles a function body inside `pulp`'s runtime dispatch so its loops use the
 //! best instruction set the CPU has (AVX2+FMA on x86-64) without `unsafe` here.
 
 use faer::traits::pulp::Arch;
@@ -14,14 +14,6 @@ use std::sync::OnceLock;
 pub(crate) fn arch() -> Arch {
     static ARCH: OnceLock<Arch> = OnceLock::new();
     *ARCH.get_or_init(Arch::new)
-}
-
-/// Runs `f` under the runtime SIMD dispatch. Only code LLVM inlines into the dispatched
-/// function gets the wider instruction set; for hot loops use [`simd_fn!`] instead, which
-/// guarantees it.
-#[inline(always)]
-pub(crate) fn simd<R>(f: impl FnOnce() -> R) -> R {
-    arch().dispatch(f)
 }
 
 /// Defines a function whose body is compiled once per SIMD level and dispatched at runtime.
@@ -89,10 +81,55 @@ pub(crate) fn tanh(x: f32) -> f32 {
     1.0 - 2.0 / (exp(2.0 * x) + 1.0)
 }
 
-/// softplus(x) = log(1 + e^x), stable for large |x|.
-#[inline]
+/// Natural log for finite x > 0 (Cephes `logf`: x = m·2ᵉ, m ∈ [√½, √2), a degree-8
+/// polynomial in m − 1; error ≈ 1 ulp). x ≤ 0, infinities and NaN are passed to `f32::ln`'s
+/// conventions by the caller's domain, not handled here.
+#[inline(always)]
+pub(crate) fn ln(x: f32) -> f32 {
+    let bits = x.to_bits();
+    let mut e = ((bits >> 23) & 0xff) as i32 - 127;
+    let mut m = f32::from_bits((bits & 0x007f_ffff) | 0x3f80_0000);
+    // Move m from [1, 2) to [√½, √2).
+    let big = m > std::f32::consts::SQRT_2;
+    m = if big { m * 0.5 } else { m };
+    e += big as i32;
+    let f = m - 1.0;
+    let z = f * f;
+    let mut p = 7.037_683_6e-2f32;
+    for c in [
+        -1.151_461e-1,
+        1.167_699_9e-1,
+        -1.242_014_1e-1,
+        1.424_932_3e-1,
+        -1.666_805_8e-1,
+        2.000_071_4e-1,
+        -2.499_999_4e-1,
+        3.333_333e-1,
+    ] {
+        p = p * f + c;
+    }
+    let e = e as f32;
+    let y = f * z * p + e * -2.121_944_4e-4 - 0.5 * z;
+    f + y + e * 0.693_359_4
+}
+
+/// log(1 + e) for e ≥ 0, accurate for tiny e (Goldberg: log(u)·e/(u − 1) with u = 1 + e
+/// rounded, which cancels the rounding of u).
+#[inline(always)]
+pub(crate) fn ln_1p(e: f32) -> f32 {
+    let u = 1.0 + e;
+    let d = u - 1.0;
+    if d == 0.0 {
+        e
+    } else {
+        ln(u) * (e / d)
+    }
+}
+
+/// softplus(x) = log(1 + e^x) = max(x, 0) + log(1 + e^(−|x|)), stable for large |x|.
+#[inline(always)]
 pub(crate) fn softplus(x: f32) -> f32 {
-    x.max(0.0) + (-x.abs()).exp().ln_1p()
+    x.max(0.0) + ln_1p(exp(-x.abs()))
 }
 
 #[cfg(test)]
@@ -111,6 +148,29 @@ mod tests {
         assert!(worst < 5e-7, "worst relative error {worst}");
         assert_eq!(exp(-1000.0).min(1e-30), exp(-1000.0));
         assert!(exp(1000.0).is_finite());
+    }
+
+    #[test]
+    fn ln_and_softplus_match_std() {
+        let mut x = 1e-30f32;
+        while x < 1e30 {
+            let want = (x as f64).ln();
+            assert!(
+                (ln(x) as f64 - want).abs() <= 2e-7 * want.abs().max(1.0),
+                "ln {x}: {} vs {want}",
+                ln(x)
+            );
+            x *= 1.37;
+        }
+        let mut x = -40.0f32;
+        while x < 40.0 {
+            let want = (x as f64).max(0.0) + (-(x as f64).abs()).exp().ln_1p();
+            assert!(
+                (softplus(x) as f64 - want).abs() <= 3e-7 * want.max(1e-3),
+                "softplus {x}"
+            );
+            x += 0.013;
+        }
     }
 
     #[test]

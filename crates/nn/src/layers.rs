@@ -57,6 +57,42 @@ impl Linear {
         }
     }
 
+    /// Several layers with the same input and output widths, stored so that they act as one
+    /// layer of `names.len() · out_dim` outputs: first every `{name}.weight` (out, in), then
+    /// every `{name}.bias` (out). The actor's mean and std heads are built this way.
+    pub fn stacked<const K: usize>(
+        params: &mut Params,
+        names: [&str; K],
+        in_dim: usize,
+        out_dim: usize,
+        rng: &mut ChaCha8Rng,
+    ) -> Self {
+        let bound = 1.0 / (in_dim.max(1) as f32).sqrt();
+        let w = names
+            .iter()
+            .map(|n| {
+                params.add(
+                    &format!("{n}.weight"),
+                    &[out_dim, in_dim],
+                    true,
+                    uniform(rng, bound),
+                )
+            })
+            .min()
+            .unwrap_or(0);
+        let b = names
+            .iter()
+            .map(|n| params.add(&format!("{n}.bias"), &[out_dim], false, uniform(rng, bound)))
+            .min()
+            .unwrap_or(0);
+        Self {
+            w,
+            b,
+            in_dim,
+            out_dim: K * out_dim,
+        }
+    }
+
     /// Input width.
     pub fn in_dim(&self) -> usize {
         self.in_dim
@@ -69,21 +105,27 @@ impl Linear {
 
     /// Records `act(x·Wᵀ + b)` for x (N, in) → (N, out).
     pub fn forward<'a>(&self, g: &mut Graph<'a>, params: &'a Params, x: Var, act: Act) -> Var {
-        g.linear_op(params, self.w, self.b, self.in_dim, self.out_dim, x, act)
+        g.linear_op(params, self.w, self.b, self.in_dim, self.out_dim, &[x], act)
+    }
+
+    /// Records `act([x₁ | x₂ | …]·Wᵀ + b)` without concatenating: each block multiplies its
+    /// column block of W, and only blocks that need a gradient get one.
+    pub fn forward_multi<'a>(
+        &self,
+        g: &mut Graph<'a>,
+        params: &'a Params,
+        xs: &[Var],
+        act: Act,
+    ) -> Var {
+        g.linear_op(params, self.w, self.b, self.in_dim, self.out_dim, xs, act)
     }
 
     /// Inference on one row without a graph: `out = act(x·Wᵀ + b)`.
     pub(crate) fn apply_row(&self, p: &[f32], x: &[f32], out: &mut [f32], act: Act) {
         let (i, o) = (self.in_dim, self.out_dim);
         let w = &p[self.w..self.w + i * o];
-        out[..o].copy_from_slice(&p[self.b..self.b + o]);
-        crate::kern::simd(|| {
-            for (k, ok) in out[..o].iter_mut().enumerate() {
-                let wr = &w[k * i..(k + 1) * i];
-                *ok += dot(wr, x);
-            }
-        });
-        crate::ops::linear::apply_act(&mut out[..o], act);
+        gemv(&mut out[..o], w, &x[..i], false);
+        crate::ops::linear::bias_act(&mut out[..o], &p[self.b..self.b + o], act);
     }
 }
 
@@ -150,9 +192,18 @@ impl Mlp {
 
     /// Records all layers; returns `x` itself when there is none.
     pub fn forward<'a>(&self, g: &mut Graph<'a>, params: &'a Params, x: Var) -> Var {
-        self.layers
-            .iter()
-            .fold(x, |h, l| l.forward(g, params, h, self.act))
+        self.forward_multi(g, params, &[x])
+    }
+
+    /// Records all layers on the column blocks `[x₁ | x₂ | …]` (the first layer reads them
+    /// without concatenating); with no layer, returns the concatenation.
+    pub fn forward_multi<'a>(&self, g: &mut Graph<'a>, params: &'a Params, xs: &[Var]) -> Var {
+        let Some((first, rest)) = self.layers.split_first() else {
+            return xs[1..].iter().fold(xs[0], |acc, &x| g.concat_cols(acc, x));
+        };
+        let h = first.forward_multi(g, params, xs, self.act);
+        rest.iter()
+            .fold(h, |h, l| l.forward(g, params, h, self.act))
     }
 }
 
@@ -260,6 +311,19 @@ impl Lstm {
         batch: usize,
         state: Option<&LstmState>,
     ) -> LstmOutput {
+        self.forward_multi(g, params, &[x], batch, state)
+    }
+
+    /// Like [`Lstm::forward`] with the input given as column blocks `[x₁ | x₂ | …]` that are
+    /// never concatenated (only blocks that need a gradient get one).
+    pub fn forward_multi<'a>(
+        &self,
+        g: &mut Graph<'a>,
+        params: &'a Params,
+        xs: &[Var],
+        batch: usize,
+        state: Option<&LstmState>,
+    ) -> LstmOutput {
         let (h0, c0) = match state {
             Some(s) => {
                 assert_eq!(
@@ -275,7 +339,7 @@ impl Lstm {
                 g.constant(Tensor::zeros(batch, self.s.hidden)),
             ),
         };
-        self.forward_vars(g, params, x, batch, h0, c0)
+        self.run(g, params, xs, batch, h0, c0)
     }
 
     /// Like [`Lstm::forward`] with the initial state as graph values (so gradients reach
@@ -289,7 +353,19 @@ impl Lstm {
         h0: Var,
         c0: Var,
     ) -> LstmOutput {
-        let (h, c_last) = g.lstm_op(params, self.s, x, h0, c0, batch);
+        self.run(g, params, &[x], batch, h0, c0)
+    }
+
+    fn run<'a>(
+        &self,
+        g: &mut Graph<'a>,
+        params: &'a Params,
+        xs: &[Var],
+        batch: usize,
+        h0: Var,
+        c0: Var,
+    ) -> LstmOutput {
+        let (h, c_last) = g.lstm_op(params, self.s, xs, h0, c0, batch);
         let rows = g.shape(h).0;
         let h_last = g.value(h).rows_range(rows - batch, batch);
         LstmOutput {
@@ -317,13 +393,20 @@ impl Lstm {
         let w_hh = &p[s.w_hh..s.w_hh + 4 * hd * hd];
         let (z, rest) = scratch[..6 * hd].split_at_mut(4 * hd);
         let (c_prev, tc) = rest.split_at_mut(hd);
-        z.copy_from_slice(&p[s.b..s.b + 4 * hd]);
-        crate::kern::simd(|| {
-            for (k, zk) in z.iter_mut().enumerate() {
-                *zk += dot(&w_ih[k * i..(k + 1) * i], x) + dot(&w_hh[k * hd..(k + 1) * hd], h);
-            }
-        });
+        gemv(z, w_ih, x, false);
+        gemv(z, w_hh, h, true);
         c_prev.copy_from_slice(c);
-        crate::ops::lstm::cell_forward(z, c_prev, c, tc, h, 1, hd);
+        crate::ops::lstm::cell_forward(z, &p[s.b..s.b + 4 * hd], c_prev, c, tc, h, 1, hd);
+    }
+}
+
+crate::kern::simd_fn! {
+    /// out[k] (+)= Σ_j w[k, j]·x[j] for a row-major (out.len(), x.len()) matrix w.
+    pub(crate) fn gemv<'a>(out: &'a mut [f32], w: &'a [f32], x: &'a [f32], accumulate: bool) {
+        let i = x.len();
+        for (k, o) in out.iter_mut().enumerate() {
+            let d = dot(&w[k * i..(k + 1) * i], x);
+            *o = if accumulate { *o + d } else { d };
+        }
     }
 }

@@ -198,8 +198,9 @@ pub struct Actor {
     params: Params,
     trunk: Mlp,
     lstm: Option<Lstm>,
-    mean: Linear,
-    std: Linear,
+    /// Both heads as one layer of 2A outputs: rows [mean.weight; std.weight], bias
+    /// [mean.bias; std.bias] (contiguous in the buffer, so one product serves both).
+    heads: Linear,
 }
 
 impl Module for Actor {
@@ -231,8 +232,7 @@ impl Actor {
             d = config.lstm_hidden;
             l
         });
-        let mean = Linear::new(&mut params, "mean", d, act_dim, &mut rng);
-        let std = Linear::new(&mut params, "std", d, act_dim, &mut rng);
+        let heads = Linear::stacked(&mut params, ["mean", "std"], d, act_dim, &mut rng);
         Ok(Self {
             config: config.clone(),
             obs_dim,
@@ -240,8 +240,7 @@ impl Actor {
             params,
             trunk,
             lstm,
-            mean,
-            std,
+            heads,
         })
     }
 
@@ -287,8 +286,9 @@ impl Actor {
             h = o.h;
             out_state = Some(o.state);
         }
-        let mean = self.mean.forward(g, p, h, Act::None);
-        let s = self.std.forward(g, p, h, Act::None);
+        let heads = self.heads.forward(g, p, h, Act::None);
+        let mean = g.slice_cols(heads, 0, self.act_dim);
+        let s = g.slice_cols(heads, self.act_dim, self.act_dim);
         let s = g.softplus(s);
         let std = g.add_scalar(s, self.config.min_std);
         ActorOutput {
@@ -343,8 +343,7 @@ impl Actor {
             scratch: vec![0.0; 6 * h],
             buf_a: vec![0.0; widest],
             buf_b: vec![0.0; widest],
-            mean: vec![0.0; self.act_dim],
-            std: vec![0.0; self.act_dim],
+            heads: vec![0.0; 2 * self.act_dim],
         }
     }
 
@@ -371,9 +370,8 @@ impl Actor {
         } else {
             &st.buf_a[..d]
         };
-        self.mean.apply_row(p, feat, &mut st.mean, Act::None);
-        self.std.apply_row(p, feat, &mut st.std, Act::None);
-        for s in st.std.iter_mut() {
+        self.heads.apply_row(p, feat, &mut st.heads, Act::None);
+        for s in st.heads[self.act_dim..].iter_mut() {
             *s = crate::kern::softplus(*s) + self.config.min_std;
         }
     }
@@ -387,8 +385,8 @@ pub struct ActorStepState {
     scratch: Vec<f32>,
     buf_a: Vec<f32>,
     buf_b: Vec<f32>,
-    mean: Vec<f32>,
-    std: Vec<f32>,
+    /// [μ | σ] of the last step.
+    heads: Vec<f32>,
 }
 
 impl ActorStepState {
@@ -400,12 +398,12 @@ impl ActorStepState {
 
     /// μ of the last step (pre-squash).
     pub fn mean(&self) -> &[f32] {
-        &self.mean
+        &self.heads[..self.heads.len() / 2]
     }
 
     /// σ of the last step.
     pub fn std(&self) -> &[f32] {
-        &self.std
+        &self.heads[self.heads.len() / 2..]
     }
 
     /// Hidden state h (empty for a feed-forward actor).
@@ -420,14 +418,14 @@ impl ActorStepState {
 
     /// Writes tanh(μ) into `action`.
     pub fn deterministic_action(&self, action: &mut [f32]) {
-        for (a, &m) in action.iter_mut().zip(&self.mean) {
+        for (a, &m) in action.iter_mut().zip(self.mean()) {
             *a = m.tanh();
         }
     }
 
     /// Writes tanh(μ + σε), ε ~ N(0, I) from `rng`, into `action`.
     pub fn sample_action<R: Rng + ?Sized>(&self, rng: &mut R, action: &mut [f32]) {
-        for ((a, &m), &s) in action.iter_mut().zip(&self.mean).zip(&self.std) {
+        for ((a, &m), &s) in action.iter_mut().zip(self.mean()).zip(self.std()) {
             let e: f32 = rng.sample(StandardNormal);
             *a = (m + s * e).tanh();
         }
@@ -566,15 +564,23 @@ impl Critic {
         let p = &self.params;
         let hs = self.obs_path.forward(g, p, obs);
         let ha = self.act_path.forward(g, p, act);
-        let x = g.concat_cols(hs, ha);
-        let mut h = self.joint.forward(g, p, x);
+        // The two paths are joined without a copy: the next layer reads both blocks.
+        let joined = [hs, ha];
+        let mut xs: &[Var] = &joined;
+        let h;
+        if !self.joint.layers().is_empty() {
+            h = [self.joint.forward_multi(g, p, xs)];
+            xs = &h;
+        }
         let mut out_state = None;
+        let lstm_out;
         if let Some(l) = &self.lstm {
-            let o = l.forward(g, p, h, batch, state);
-            h = o.h;
+            let o = l.forward_multi(g, p, xs, batch, state);
+            lstm_out = [o.h];
+            xs = &lstm_out;
             out_state = Some(o.state);
         }
-        let q = self.q.forward(g, p, h, Act::None);
+        let q = self.q.forward_multi(g, p, xs, Act::None);
         CriticOutput {
             q,
             state: out_state,

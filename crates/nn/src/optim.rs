@@ -97,7 +97,8 @@ pub struct AdamState {
 #[derive(Clone, Debug)]
 pub struct Adam {
     config: AdamConfig,
-    decay: Vec<bool>,
+    /// 1 where L2 applies (weights), 0 elsewhere.
+    decay: Vec<f32>,
     state: AdamState,
 }
 
@@ -123,9 +124,9 @@ impl Adam {
     /// An optimiser for `params` (only its layout is read).
     pub fn new(config: AdamConfig, params: &Params) -> Result<Self, NnError> {
         config.validate()?;
-        let mut decay = vec![false; params.len()];
+        let mut decay = vec![0.0f32; params.len()];
         for s in params.specs() {
-            decay[s.range()].fill(s.decay);
+            decay[s.range()].fill(if s.decay { 1.0 } else { 0.0 });
         }
         let n = params.len();
         Ok(Self {
@@ -218,16 +219,64 @@ impl Adam {
         let inv_sqrt_bc2 = (1.0 / bc2.sqrt()) as f32;
         let (b1, b2, eps, l2) = (c.beta1, c.beta2, c.eps, c.l2);
         let theta = params.as_mut_slice();
-        crate::kern::simd(|| {
-            for i in 0..n {
-                let g = grad[i] + if self.decay[i] { l2 * theta[i] } else { 0.0 };
-                let m = b1 * self.state.m[i] + (1.0 - b1) * g;
-                let v = b2 * self.state.v[i] + (1.0 - b2) * g * g;
-                self.state.m[i] = m;
-                self.state.v[i] = v;
-                theta[i] -= step * m / (v.sqrt() * inv_sqrt_bc2 + eps);
-            }
-        });
+        let k = AdamConsts {
+            b1,
+            b2,
+            eps,
+            l2,
+            step,
+            inv_sqrt_bc2,
+        };
+        adam_update(
+            theta,
+            grad,
+            &self.decay,
+            &mut self.state.m,
+            &mut self.state.v,
+            k,
+        );
         Ok(norm)
+    }
+}
+
+/// Scalars of one Adam step.
+#[derive(Clone, Copy)]
+struct AdamConsts {
+    b1: f32,
+    b2: f32,
+    eps: f32,
+    l2: f32,
+    /// lr / (1 − β₁ᵗ).
+    step: f32,
+    /// 1 / √(1 − β₂ᵗ).
+    inv_sqrt_bc2: f32,
+}
+
+crate::kern::simd_fn! {
+    /// The elementwise Adam update (see the module doc).
+    fn adam_update<'a>(theta: &'a mut [f32], grad: &'a [f32], decay: &'a [f32], m: &'a mut [f32], v: &'a mut [f32], k: AdamConsts) {
+        adam_rows(theta, grad, decay, m, v, k);
+    }
+}
+
+/// Body of [`adam_update`]; slices as separate arguments so the loop vectorises.
+#[inline(always)]
+fn adam_rows(
+    theta: &mut [f32],
+    grad: &[f32],
+    decay: &[f32],
+    m: &mut [f32],
+    v: &mut [f32],
+    k: AdamConsts,
+) {
+    let n = theta.len();
+    let (grad, decay, m, v) = (&grad[..n], &decay[..n], &mut m[..n], &mut v[..n]);
+    for i in 0..n {
+        let g = grad[i] + k.l2 * decay[i] * theta[i];
+        let mi = k.b1 * m[i] + (1.0 - k.b1) * g;
+        let vi = k.b2 * v[i] + (1.0 - k.b2) * g * g;
+        m[i] = mi;
+        v[i] = vi;
+        theta[i] -= k.step * mi / (vi.sqrt() * k.inv_sqrt_bc2 + k.eps);
     }
 }

@@ -179,14 +179,21 @@ impl Params {
                 found: source.len(),
             });
         }
-        for (t, &s) in self.values.iter_mut().zip(&source.values) {
-            *t += tau * (s - *t);
-        }
+        lerp(&mut self.values, &source.values, tau);
         Ok(())
     }
 
     /// Copies all values from `source` (a hard target update, eq. 2).
     pub fn copy_from(&mut self, source: &Params) -> Result<(), NnError> {
         self.set_flat(&source.values)
+    }
+}
+
+crate::kern::simd_fn! {
+    /// t ← t + τ(s − t).
+    fn lerp<'a>(t: &'a mut [f32], s: &'a [f32], tau: f32) {
+        for (t, &s) in t.iter_mut().zip(s) {
+            *t += tau * (s - *t);
+        }
     }
 }

@@ -370,3 +370,43 @@ fn no_grad_graph_and_frozen_sets_compute_nothing() {
         1e-7,
     );
 }
+
+#[test]
+fn linear_on_column_blocks_equals_linear_on_their_concatenation() {
+    // [x₁ | x₂]·Wᵀ without a concatenation: values and all gradients equal the concatenated
+    // version's, and a constant block gets no gradient.
+    let (n, i1, i2, o) = (4, 3, 2, 5);
+    let mut rng = <rand_chacha::ChaCha8Rng as rand::SeedableRng>::seed_from_u64(8);
+    let mut params = Params::new();
+    let lin = Linear::new(&mut params, "l", i1 + i2, o, &mut rng);
+    let x1 = Tensor::from_vec(n, i1, uniform(n * i1, -1.0, 1.0, 30));
+    let x2 = Tensor::from_vec(n, i2, uniform(n * i2, -1.0, 1.0, 31));
+    let w = Tensor::from_vec(n, o, uniform(n * o, -1.0, 1.0, 32));
+    let run = |blocks: bool| {
+        let mut g = Graph::new();
+        let a = g.leaf(x1.clone());
+        let b = g.constant(x2.clone());
+        let y = if blocks {
+            lin.forward_multi(&mut g, &params, &[a, b], Act::Tanh)
+        } else {
+            let x = g.concat_cols(a, b);
+            lin.forward(&mut g, &params, x, Act::Tanh)
+        };
+        let wv = g.constant(w.clone());
+        let yw = g.mul(y, wv);
+        let loss = g.sum(yw);
+        let yv = g.value(y).clone();
+        let grads = g.backward(loss);
+        assert!(grads.var(b).is_none());
+        (
+            yv,
+            grads.var(a).unwrap().clone(),
+            grads.of(&params).unwrap().to_vec(),
+        )
+    };
+    let (y1, da1, dp1) = run(true);
+    let (y2, da2, dp2) = run(false);
+    assert_close("blocks forward", y1.data(), &f64s(y2.data()), 1e-6, 1e-7);
+    assert_close("blocks dx₁", da1.data(), &f64s(da2.data()), 1e-6, 1e-7);
+    assert_close("blocks dθ", &dp1, &f64s(&dp2), 1e-6, 1e-7);
+}

@@ -6,56 +6,52 @@ use crate::kern;
 use crate::tensor::Tensor;
 
 impl Graph<'_> {
-    fn unary(&mut self, x: Var, f: Unary, map: impl Fn(f32) -> f32) -> Var {
+    fn unary(&mut self, x: Var, f: Unary) -> Var {
         let xv = self.value(x);
         let mut out = Tensor::uninit(xv.rows(), xv.cols());
-        kern::simd(|| {
-            for (o, &v) in out.data_mut().iter_mut().zip(xv.data()) {
-                *o = map(v);
-            }
-        });
+        unary_forward(f, xv.data(), out.data_mut());
         let rg = self.rg(x);
         self.push(out, Op::Unary { x, f }, rg)
     }
 
     /// `max(x, 0)`. Derivative: 1 where the output is positive, else 0.
     pub fn relu(&mut self, x: Var) -> Var {
-        self.unary(x, Unary::Relu, |v| v.max(0.0))
+        self.unary(x, Unary::Relu)
     }
 
     /// `tanh(x)`. Derivative: 1 − tanh²(x), read from the output.
     pub fn tanh(&mut self, x: Var) -> Var {
-        self.unary(x, Unary::Tanh, kern::tanh)
+        self.unary(x, Unary::Tanh)
     }
 
     /// `σ(x) = 1 / (1 + e^(−x))`. Derivative: σ(x)(1 − σ(x)), read from the output.
     pub fn sigmoid(&mut self, x: Var) -> Var {
-        self.unary(x, Unary::Sigmoid, kern::sigmoid)
+        self.unary(x, Unary::Sigmoid)
     }
 
     /// `softplus(x) = log(1 + e^x)`. Derivative: σ(x).
     pub fn softplus(&mut self, x: Var) -> Var {
-        self.unary(x, Unary::Softplus, kern::softplus)
+        self.unary(x, Unary::Softplus)
     }
 
     /// `e^x`. Derivative: e^x, read from the output.
     pub fn exp(&mut self, x: Var) -> Var {
-        self.unary(x, Unary::Exp, f32::exp)
+        self.unary(x, Unary::Exp)
     }
 
     /// Natural log. Derivative: 1 / x.
     pub fn log(&mut self, x: Var) -> Var {
-        self.unary(x, Unary::Log, f32::ln)
+        self.unary(x, Unary::Log)
     }
 
     /// `−x`. Derivative: −1.
     pub fn neg(&mut self, x: Var) -> Var {
-        self.unary(x, Unary::Neg, |v| -v)
+        self.unary(x, Unary::Neg)
     }
 
     /// `x²`. Derivative: 2x.
     pub fn square(&mut self, x: Var) -> Var {
-        self.unary(x, Unary::Square, |v| v * v)
+        self.unary(x, Unary::Square)
     }
 
     /// `s·x` for a constant `s`. Derivative: s.
@@ -151,48 +147,44 @@ fn broadcast_shape(a: &Tensor, b: &Tensor, f: Binary) -> (usize, usize) {
     }
 }
 
-/// dx = dy · f'(x), with f' from [`Graph::relu`] … [`Graph::square`].
+kern::simd_fn! {
+    /// out = f(x) elementwise (the forwards listed on [`Graph::relu`] … [`Graph::square`]).
+    fn unary_forward<'a>(f: Unary, x: &'a [f32], out: &'a mut [f32]) {
+        let it = out.iter_mut().zip(x);
+        match f {
+            Unary::Relu => it.for_each(|(o, &v)| *o = v.max(0.0)),
+            Unary::Tanh => it.for_each(|(o, &v)| *o = kern::tanh(v)),
+            Unary::Sigmoid => it.for_each(|(o, &v)| *o = kern::sigmoid(v)),
+            Unary::Softplus => it.for_each(|(o, &v)| *o = kern::softplus(v)),
+            Unary::Exp => it.for_each(|(o, &v)| *o = v.exp()),
+            Unary::Log => it.for_each(|(o, &v)| *o = v.ln()),
+            Unary::Neg => it.for_each(|(o, &v)| *o = -v),
+            Unary::Square => it.for_each(|(o, &v)| *o = v * v),
+        }
+    }
+}
+
+/// dx += dy · f'(x), with f' from [`Graph::relu`] … [`Graph::square`].
 pub(crate) fn unary_backward(x: Var, f: Unary, y: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
     let x_in = ctx.val(x).data();
     let Some(dx) = ctx.grad(x) else { return };
-    let (dx, y, dy) = (dx.data_mut(), y.data(), dy.data());
-    kern::simd(|| match f {
-        Unary::Relu => dx
-            .iter_mut()
-            .zip(y.iter().zip(dy))
-            .for_each(|(g, (&y, &d))| *g += if y > 0.0 { d } else { 0.0 }),
-        Unary::Tanh => dx
-            .iter_mut()
-            .zip(y.iter().zip(dy))
-            .for_each(|(g, (&y, &d))| *g += d * (1.0 - y * y)),
-        Unary::Sigmoid => dx
-            .iter_mut()
-            .zip(y.iter().zip(dy))
-            .for_each(|(g, (&y, &d))| *g += d * y * (1.0 - y)),
-        Unary::Exp => dx
-            .iter_mut()
-            .zip(y.iter().zip(dy))
-            .for_each(|(g, (&y, &d))| *g += d * y),
-        Unary::Neg => dx.iter_mut().zip(dy).for_each(|(g, &d)| *g -= d),
-        Unary::Softplus => {
-            let x = x_in;
-            dx.iter_mut()
-                .zip(x.iter().zip(dy))
-                .for_each(|(g, (&x, &d))| *g += d * kern::sigmoid(x))
+    unary_grad(f, x_in, y.data(), dy.data(), dx.data_mut());
+}
+
+kern::simd_fn! {
+    /// dx += dy · f'(x) (reading f' from the output y where that is cheaper).
+    fn unary_grad<'a>(f: Unary, x: &'a [f32], y: &'a [f32], dy: &'a [f32], dx: &'a mut [f32]) {
+        match f {
+            Unary::Relu => dx.iter_mut().zip(y.iter().zip(dy)).for_each(|(g, (&y, &d))| *g += if y > 0.0 { d } else { 0.0 }),
+            Unary::Tanh => dx.iter_mut().zip(y.iter().zip(dy)).for_each(|(g, (&y, &d))| *g += d * (1.0 - y * y)),
+            Unary::Sigmoid => dx.iter_mut().zip(y.iter().zip(dy)).for_each(|(g, (&y, &d))| *g += d * y * (1.0 - y)),
+            Unary::Exp => dx.iter_mut().zip(y.iter().zip(dy)).for_each(|(g, (&y, &d))| *g += d * y),
+            Unary::Neg => dx.iter_mut().zip(dy).for_each(|(g, &d)| *g -= d),
+            Unary::Softplus => dx.iter_mut().zip(x.iter().zip(dy)).for_each(|(g, (&x, &d))| *g += d * kern::sigmoid(x)),
+            Unary::Log => dx.iter_mut().zip(x.iter().zip(dy)).for_each(|(g, (&x, &d))| *g += d / x),
+            Unary::Square => dx.iter_mut().zip(x.iter().zip(dy)).for_each(|(g, (&x, &d))| *g += 2.0 * x * d),
         }
-        Unary::Log => {
-            let x = x_in;
-            dx.iter_mut()
-                .zip(x.iter().zip(dy))
-                .for_each(|(g, (&x, &d))| *g += d / x)
-        }
-        Unary::Square => {
-            let x = x_in;
-            dx.iter_mut()
-                .zip(x.iter().zip(dy))
-                .for_each(|(g, (&x, &d))| *g += 2.0 * x * d)
-        }
-    });
+    }
 }
 
 /// Accumulates `val(i)` into `g`, summing when `g` is a broadcast `(1, 1)` operand.

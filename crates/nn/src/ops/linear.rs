@@ -1,16 +1,32 @@
 //! The fully connected op `y = act(x·Wᵀ + b)` (PyTorch's `nn.Linear` layout: W is (out, in)).
+//!
+//! The input may be given as column blocks `x = [x₁ | x₂ | …]` that are never concatenated:
+//! each block multiplies its own column block of W (a strided view). The critic's state and
+//! action paths feed their join this way, and in the actor loss only the action block, which
+//! needs a gradient, pays for one.
 
-use crate::gemm::{gemm, Tr};
+use crate::gemm::{gemm_ex, Tr};
 use crate::graph::{BackCtx, Graph, Op, Var};
 use crate::kern;
 use crate::ops::Act;
 use crate::params::Params;
 use crate::tensor::Tensor;
 
+/// The recorded op.
+pub(crate) struct LinearNode {
+    xs: Vec<Var>,
+    set: usize,
+    w: usize,
+    b: usize,
+    in_dim: usize,
+    act: Act,
+}
+
 impl<'a> Graph<'a> {
-    /// `y = act(x·Wᵀ + b)` with x (N, in), W (out, in) at `w` and b (out) at `b` inside
-    /// `params`. Derivatives, with dz = dy ⊙ act'(·) (1[y > 0] for ReLU, 1 − y² for tanh):
-    /// dx = dz·W, dW = dzᵀ·x, db = Σ_rows dz.
+    /// `y = act([x₁ | x₂ | …]·Wᵀ + b)` with the x_k (N, i_k), Σ i_k = in, W (out, in) at `w`
+    /// and b (out) at `b` inside `params`. Derivatives, with dz = dy ⊙ act'(·) (1[y > 0] for
+    /// ReLU, 1 − y² for tanh): dx_k = dz·W[:, block k], dW[:, block k] = dzᵀ·x_k,
+    /// db = Σ_rows dz.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn linear_op(
         &mut self,
@@ -19,77 +35,100 @@ impl<'a> Graph<'a> {
         b: usize,
         in_dim: usize,
         out_dim: usize,
-        x: Var,
+        xs: &[Var],
         act: Act,
     ) -> Var {
         let (set, trainable) = self.bind(params);
         let p = self.pvals(set);
-        let xv = self.value(x);
+        assert!(!xs.is_empty(), "linear: no input");
+        let n = self.value(xs[0]).rows();
+        let width: usize = xs.iter().map(|&x| self.value(x).cols()).sum();
         assert_eq!(
-            xv.cols(),
-            in_dim,
-            "linear: input has {} columns, layer expects {in_dim}",
-            xv.cols()
+            width, in_dim,
+            "linear: inputs have {width} columns in all, layer expects {in_dim}"
         );
-        let n = xv.rows();
         let mut out = Tensor::uninit(n, out_dim);
-        linear_forward(
-            out.data_mut(),
-            xv.data(),
-            &p[w..w + out_dim * in_dim],
-            &p[b..b + out_dim],
-            n,
-            in_dim,
-            out_dim,
-            act,
-        );
-        let rg = self.rg(x) || trainable;
-        self.push(out, Op::Linear { x, set, w, b, act }, rg)
+        let mut off = 0;
+        for (k, &x) in xs.iter().enumerate() {
+            let xv = self.value(x);
+            assert_eq!(
+                xv.rows(),
+                n,
+                "linear: input blocks have {} and {n} rows",
+                xv.rows()
+            );
+            let wk = xv.cols();
+            gemm_ex(
+                out.data_mut(),
+                out_dim,
+                n,
+                out_dim,
+                wk,
+                xv.data(),
+                wk,
+                Tr::N,
+                &p[w + off..],
+                in_dim,
+                Tr::T,
+                k > 0,
+            );
+            off += wk;
+        }
+        bias_act(out.data_mut(), &p[b..b + out_dim], act);
+        let rg = trainable || xs.iter().any(|&x| self.rg(x));
+        self.push(
+            out,
+            Op::Linear(Box::new(LinearNode {
+                xs: xs.to_vec(),
+                set,
+                w,
+                b,
+                in_dim,
+                act,
+            })),
+            rg,
+        )
     }
 }
 
-/// out (n, o) = act(x (n, i) · wᵀ + b).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn linear_forward(
-    out: &mut [f32],
-    x: &[f32],
-    w: &[f32],
-    b: &[f32],
-    n: usize,
-    i: usize,
-    o: usize,
-    act: Act,
-) {
-    for r in 0..n {
-        out[r * o..(r + 1) * o].copy_from_slice(b);
-    }
-    gemm(out, n, o, i, x, Tr::N, w, Tr::T, true);
-    apply_act(out, act);
-}
-
-/// In-place activation.
-pub(crate) fn apply_act(v: &mut [f32], act: Act) {
+/// In-place `v[r, :] ← act(v[r, :] + b)` for every row.
+pub(crate) fn bias_act(v: &mut [f32], b: &[f32], act: Act) {
     match act {
-        Act::None => {}
-        Act::Relu => relu_inplace(v),
-        Act::Tanh => tanh_inplace(v),
+        Act::None => bias_none(v, b),
+        Act::Relu => bias_relu(v, b),
+        Act::Tanh => bias_tanh(v, b),
     }
 }
 
 kern::simd_fn! {
-    /// v ← max(v, 0).
-    fn relu_inplace<'a>(v: &'a mut [f32]) {
-        for x in v.iter_mut() {
-            *x = x.max(0.0);
+    /// v ← v + b (row-broadcast).
+    fn bias_none<'a>(v: &'a mut [f32], b: &'a [f32]) {
+        for row in v.chunks_exact_mut(b.len()) {
+            for (x, &c) in row.iter_mut().zip(b) {
+                *x += c;
+            }
         }
     }
 }
 
 kern::simd_fn! {
-    /// v ← tanh(v).
-    fn tanh_inplace<'a>(v: &'a mut [f32]) {
-        for x in v.iter_mut() {
-            *x = kern::tanh(*x);
+    /// v ← max(v + b, 0).
+    fn bias_relu<'a>(v: &'a mut [f32], b: &'a [f32]) {
+        for row in v.chunks_exact_mut(b.len()) {
+            for (x, &c) in row.iter_mut().zip(b) {
+                *x = (*x + c).max(0.0);
+            }
+        }
+    }
+}
+
+kern::simd_fn! {
+    /// v ← tanh(v + b).
+    fn bias_tanh<'a>(v: &'a mut [f32], b: &'a [f32]) {
+        for row in v.chunks_exact_mut(b.len()) {
+            for (x, &c) in row.iter_mut().zip(b) {
+                *x = kern::tanh(*x + c);
+            }
         }
     }
 }
@@ -113,20 +152,22 @@ kern::simd_fn! {
 }
 
 /// Backward of [`Graph::linear_op`]; see its doc for the derivatives.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn linear_backward(
-    x: Var,
-    set: usize,
-    w: usize,
-    b: usize,
-    act: Act,
+    node: &LinearNode,
     y: &Tensor,
     dy: &Tensor,
     ctx: &mut BackCtx<'_, '_>,
 ) {
+    let LinearNode {
+        xs,
+        set,
+        w,
+        b,
+        in_dim,
+        act,
+    } = node;
+    let (set, w, b, in_dim, act) = (*set, *w, *b, *in_dim, *act);
     let (n, o) = dy.shape();
-    let xv = ctx.val(x);
-    let i = xv.cols();
     let mut owned = Vec::new();
     if act != Act::None {
         owned = crate::pool::copy(dy.data());
@@ -138,32 +179,49 @@ pub(crate) fn linear_backward(
     }
     let dz: &[f32] = if act == Act::None { dy.data() } else { &owned };
     let p = ctx.pvals(set);
+    let xvals: Vec<&Tensor> = xs.iter().map(|&x| ctx.val(x)).collect();
     if let Some(pg) = ctx.pgrad(set) {
-        gemm(
-            &mut pg[w..w + o * i],
-            o,
-            i,
-            n,
-            dz,
-            Tr::T,
-            xv.data(),
-            Tr::N,
-            true,
-        );
+        let mut off = 0;
+        for xv in &xvals {
+            let wk = xv.cols();
+            gemm_ex(
+                &mut pg[w + off..],
+                in_dim,
+                o,
+                wk,
+                n,
+                dz,
+                o,
+                Tr::T,
+                xv.data(),
+                wk,
+                Tr::N,
+                true,
+            );
+            off += wk;
+        }
         col_sum_into(&mut pg[b..b + o], dz, n, o);
     }
-    if let Some(dx) = ctx.grad(x) {
-        gemm(
-            dx.data_mut(),
-            n,
-            i,
-            o,
-            dz,
-            Tr::N,
-            &p[w..w + o * i],
-            Tr::N,
-            true,
-        );
+    let mut off = 0;
+    for (&x, xv) in xs.iter().zip(&xvals) {
+        let wk = xv.cols();
+        if let Some((dx, fresh)) = ctx.grad_fresh(x) {
+            gemm_ex(
+                dx.data_mut(),
+                wk,
+                n,
+                wk,
+                o,
+                dz,
+                o,
+                Tr::N,
+                &p[w + off..],
+                in_dim,
+                Tr::N,
+                !fresh,
+            );
+        }
+        off += wk;
     }
     crate::pool::recycle(owned);
 }

@@ -10,9 +10,11 @@
 //! h_t = o ⊙ tanh(c_t)
 //! ```
 //!
-//! Inputs are time-major `(T·B, I)`; the input projection of all T steps is one product.
+//! Inputs are time-major `(T·B, I)`; the input projection of all T steps is one product per
+//! input block (the input may be given as column blocks `[x₁ | x₂ | …]`, never concatenated;
+//! blocks that need no gradient cost no backward product).
 
-use crate::gemm::{gemm, Tr};
+use crate::gemm::{gemm, gemm_ex, Tr};
 use crate::graph::{BackCtx, Graph, Op, Var};
 use crate::kern;
 use crate::ops::linear::col_sum_into;
@@ -31,7 +33,7 @@ pub(crate) struct LstmSlots {
 
 /// The recorded op: inputs, slots and the caches BPTT needs.
 pub(crate) struct LstmNode {
-    x: Var,
+    xs: Vec<Var>,
     h0: Var,
     c0: Var,
     set: usize,
@@ -54,8 +56,8 @@ impl Drop for LstmNode {
 }
 
 impl<'a> Graph<'a> {
-    /// Runs the LSTM in `params` at `s` over `x` (T·B, I) time-major from the state
-    /// `h0`, `c0` (B, H). Returns the hidden sequence (T·B, H) and the final cell state
+    /// Runs the LSTM in `params` at `s` over `x = [x₁ | x₂ | …]` (T·B, I) time-major from the
+    /// state `h0`, `c0` (B, H). Returns the hidden sequence (T·B, H) and the final cell state
     /// (the final hidden state is the last B rows of the sequence).
     ///
     /// Derivatives (BPTT), per step from t = T−1 down, with dh = dy_t + dh_{t+1→t}:
@@ -67,35 +69,64 @@ impl<'a> Graph<'a> {
         &mut self,
         params: &'a Params,
         s: LstmSlots,
-        x: Var,
+        xs: &[Var],
         h0: Var,
         c0: Var,
         batch: usize,
     ) -> (Var, Tensor) {
         let (set, trainable) = self.bind(params);
         let p = self.pvals(set);
-        let (xv, h0v, c0v) = (self.value(x), self.value(h0), self.value(c0));
-        let (rows, i_dim) = xv.shape();
         let h = s.hidden;
+        let g4 = 4 * h;
+        assert!(!xs.is_empty(), "lstm: no input");
+        let rows = self.value(xs[0]).rows();
+        let width: usize = xs.iter().map(|&x| self.value(x).cols()).sum();
         assert_eq!(
-            i_dim, s.input,
-            "lstm: input has {i_dim} columns, layer expects {}",
+            width, s.input,
+            "lstm: inputs have {width} columns in all, layer expects {}",
             s.input
         );
         assert!(
-            batch > 0 && rows % batch == 0,
-            "lstm: {rows} rows is not a multiple of batch {batch}"
+            batch > 0 && rows % batch == 0 && rows > 0,
+            "lstm: {rows} rows is not a positive multiple of batch {batch}"
         );
+        let (h0v, c0v) = (self.value(h0), self.value(c0));
         assert_eq!(h0v.shape(), (batch, h), "lstm: h0 shape");
         assert_eq!(c0v.shape(), (batch, h), "lstm: c0 shape");
         let mut out = Tensor::uninit(rows, h);
-        let mut gates = crate::pool::dirty(rows * 4 * h);
+        let mut gates = crate::pool::dirty(rows * g4);
         let mut c = crate::pool::dirty(rows * h);
         let mut tc = crate::pool::dirty(rows * h);
-        lstm_forward(
+        // Input projection of all steps: one product per input block, no bias yet.
+        let mut off = 0;
+        for (k, &x) in xs.iter().enumerate() {
+            let xv = self.value(x);
+            assert_eq!(
+                xv.rows(),
+                rows,
+                "lstm: input blocks have {} and {rows} rows",
+                xv.rows()
+            );
+            let wk = xv.cols();
+            gemm_ex(
+                &mut gates,
+                g4,
+                rows,
+                g4,
+                wk,
+                xv.data(),
+                wk,
+                Tr::N,
+                &p[s.w_ih + off..],
+                s.input,
+                Tr::T,
+                k > 0,
+            );
+            off += wk;
+        }
+        recurrence(
             p,
             s,
-            xv.data(),
             h0v.data(),
             c0v.data(),
             batch,
@@ -104,9 +135,9 @@ impl<'a> Graph<'a> {
             &mut c,
             &mut tc,
         );
-        let t = rows / batch;
-        let c_last = Tensor::from_slice(batch, h, &c[(t - 1) * batch * h..]);
-        let rg = trainable || self.rg(x) || self.rg(h0) || self.rg(c0);
+        let steps = rows / batch;
+        let c_last = Tensor::from_slice(batch, h, &c[(steps - 1) * batch * h..]);
+        let rg = trainable || xs.iter().any(|&x| self.rg(x)) || self.rg(h0) || self.rg(c0);
         let keep = rg && self.grad_enabled();
         let (gates, c, tc) = if keep {
             (gates, c, tc)
@@ -117,7 +148,7 @@ impl<'a> Graph<'a> {
             (Vec::new(), Vec::new(), Vec::new())
         };
         let node = LstmNode {
-            x,
+            xs: xs.to_vec(),
             h0,
             c0,
             set,
@@ -131,12 +162,12 @@ impl<'a> Graph<'a> {
     }
 }
 
-/// Forward over all steps; fills `out` (T·B, H), `gates` (T·B, 4H), `c` and `tc` (T·B, H).
+/// The recurrent part of the forward, given the input projections (without bias) in
+/// `gates` (T·B, 4H): fills `out` (T·B, H), activates `gates`, fills `c` and `tc`.
 #[allow(clippy::too_many_arguments)]
-pub(crate) fn lstm_forward(
+fn recurrence(
     p: &[f32],
     s: LstmSlots,
-    x: &[f32],
     h0: &[f32],
     c0: &[f32],
     batch: usize,
@@ -145,17 +176,11 @@ pub(crate) fn lstm_forward(
     c: &mut [f32],
     tc: &mut [f32],
 ) {
-    let (h, i_dim) = (s.hidden, s.input);
+    let h = s.hidden;
     let g4 = 4 * h;
-    let rows = x.len() / i_dim;
-    let steps = rows / batch;
-    let w_ih = &p[s.w_ih..s.w_ih + g4 * i_dim];
+    let steps = out.len() / (batch * h);
     let w_hh = &p[s.w_hh..s.w_hh + g4 * h];
     let bias = &p[s.b..s.b + g4];
-    for r in 0..rows {
-        gates[r * g4..(r + 1) * g4].copy_from_slice(bias);
-    }
-    gemm(gates, rows, g4, i_dim, x, Tr::N, w_ih, Tr::T, true);
     let bh = batch * h;
     for t in 0..steps {
         let z = &mut gates[t * batch * g4..(t + 1) * batch * g4];
@@ -166,6 +191,7 @@ pub(crate) fn lstm_forward(
         let c_prev: &[f32] = if t == 0 { c0 } else { &c_done[(t - 1) * bh..] };
         cell_forward(
             z,
+            bias,
             c_prev,
             &mut c_cur[..bh],
             &mut tc[t * bh..(t + 1) * bh],
@@ -177,22 +203,26 @@ pub(crate) fn lstm_forward(
 }
 
 kern::simd_fn! {
-    /// Gate nonlinearities and the state update for one step of B rows; activates `z` in
-    /// place.
-    pub(crate) fn cell_forward<'a>(z: &'a mut [f32], c_prev: &'a [f32], c: &'a mut [f32], tc: &'a mut [f32], hout: &'a mut [f32], batch: usize, h: usize) {
+    /// Adds the bias, applies the gate nonlinearities and updates the state for one step of
+    /// B rows; `z` (B, 4H) is activated in place.
+    pub(crate) fn cell_forward<'a>(z: &'a mut [f32], bias: &'a [f32], c_prev: &'a [f32], c: &'a mut [f32], tc: &'a mut [f32], hout: &'a mut [f32], batch: usize, h: usize) {
+        let (bi, rest) = bias.split_at(h);
+        let (bf, rest) = rest.split_at(h);
+        let (bg, bo) = rest.split_at(h);
         for r in 0..batch {
             let zr = &mut z[r * 4 * h..(r + 1) * 4 * h];
             let (zi, rest) = zr.split_at_mut(h);
             let (zf, rest) = rest.split_at_mut(h);
             let (zg, zo) = rest.split_at_mut(h);
             let rr = r * h..(r + 1) * h;
-            cell_forward_row(zi, zf, zg, zo, &c_prev[rr.clone()], &mut c[rr.clone()], &mut tc[rr.clone()], &mut hout[rr]);
+            cell_forward_row(zi, zf, zg, zo, bi, bf, bg, bo, &c_prev[rr.clone()], &mut c[rr.clone()], &mut tc[rr.clone()], &mut hout[rr]);
         }
     }
 }
 
-/// One row of [`cell_forward`]. Separate slice arguments carry `noalias`, so the loop
-/// vectorises without runtime overlap checks.
+/// One row of [`cell_forward`]. Every slice is its own argument so it carries `noalias`
+/// and the loop vectorises without runtime overlap checks (slices packed in an array or
+/// split inside the function lose that and fall back to scalar code).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn cell_forward_row(
@@ -200,6 +230,10 @@ fn cell_forward_row(
     zf: &mut [f32],
     zg: &mut [f32],
     zo: &mut [f32],
+    bi: &[f32],
+    bf: &[f32],
+    bg: &[f32],
+    bo: &[f32],
     cp: &[f32],
     c: &mut [f32],
     tc: &mut [f32],
@@ -215,11 +249,12 @@ fn cell_forward_row(
         &mut tc[..n],
         &mut h[..n],
     );
+    let (bi, bf, bg, bo) = (&bi[..n], &bf[..n], &bg[..n], &bo[..n]);
     for j in 0..n {
-        let i = kern::sigmoid(zi[j]);
-        let f = kern::sigmoid(zf[j]);
-        let g = kern::tanh(zg[j]);
-        let o = kern::sigmoid(zo[j]);
+        let i = kern::sigmoid(zi[j] + bi[j]);
+        let f = kern::sigmoid(zf[j] + bf[j]);
+        let g = kern::tanh(zg[j] + bg[j]);
+        let o = kern::sigmoid(zo[j] + bo[j]);
         let cn = f * cp[j] + i * g;
         let t = kern::tanh(cn);
         zi[j] = i;
@@ -235,15 +270,14 @@ fn cell_forward_row(
 /// BPTT; see [`Graph::lstm_op`] for the derivatives.
 pub(crate) fn lstm_backward(n: &LstmNode, y: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
     let s = n.s;
-    let (h, i_dim, batch) = (s.hidden, s.input, n.batch);
+    let (h, batch) = (s.hidden, n.batch);
     let g4 = 4 * h;
     let rows = dy.rows();
     let steps = rows / batch;
     let bh = batch * h;
     let p = ctx.pvals(n.set);
-    let w_ih = &p[s.w_ih..s.w_ih + g4 * i_dim];
     let w_hh = &p[s.w_hh..s.w_hh + g4 * h];
-    let (xv, h0v, c0v) = (ctx.val(n.x), ctx.val(n.h0), ctx.val(n.c0));
+    let (h0v, c0v) = (ctx.val(n.h0), ctx.val(n.c0));
     let need_h0 = ctx.rg(n.h0);
     let mut dz = crate::pool::dirty(rows * g4);
     let mut dh_next = crate::pool::zeros(bh);
@@ -255,11 +289,12 @@ pub(crate) fn lstm_backward(n: &LstmNode, y: &Tensor, dy: &Tensor, ctx: &mut Bac
             &n.c[(t - 1) * bh..t * bh]
         };
         let zt = &mut dz[t * batch * g4..(t + 1) * batch * g4];
+        let rt = t * bh..(t + 1) * bh;
         cell_backward(
             &n.gates[t * batch * g4..(t + 1) * batch * g4],
-            &n.tc[t * bh..(t + 1) * bh],
+            &n.tc[rt.clone()],
             c_prev,
-            &dy.data()[t * bh..(t + 1) * bh],
+            &dy.data()[rt],
             &dh_next,
             &mut dc_next,
             zt,
@@ -282,18 +317,27 @@ pub(crate) fn lstm_backward(n: &LstmNode, y: &Tensor, dy: &Tensor, ctx: &mut Bac
             .zip(&dc_next)
             .for_each(|(a, b)| *a += b);
     }
+    let xvals: Vec<&Tensor> = n.xs.iter().map(|&x| ctx.val(x)).collect();
     if let Some(pg) = ctx.pgrad(n.set) {
-        gemm(
-            &mut pg[s.w_ih..s.w_ih + g4 * i_dim],
-            g4,
-            i_dim,
-            rows,
-            &dz,
-            Tr::T,
-            xv.data(),
-            Tr::N,
-            true,
-        );
+        let mut off = 0;
+        for xv in &xvals {
+            let wk = xv.cols();
+            gemm_ex(
+                &mut pg[s.w_ih + off..],
+                s.input,
+                g4,
+                wk,
+                rows,
+                &dz,
+                g4,
+                Tr::T,
+                xv.data(),
+                wk,
+                Tr::N,
+                true,
+            );
+            off += wk;
+        }
         let dwhh = &mut pg[s.w_hh..s.w_hh + g4 * h];
         gemm(
             dwhh,
@@ -321,18 +365,26 @@ pub(crate) fn lstm_backward(n: &LstmNode, y: &Tensor, dy: &Tensor, ctx: &mut Bac
         }
         col_sum_into(&mut pg[s.b..s.b + g4], &dz, rows, g4);
     }
-    if let Some(dx) = ctx.grad(n.x) {
-        gemm(
-            dx.data_mut(),
-            rows,
-            i_dim,
-            g4,
-            &dz,
-            Tr::N,
-            w_ih,
-            Tr::N,
-            true,
-        );
+    let mut off = 0;
+    for (&x, xv) in n.xs.iter().zip(&xvals) {
+        let wk = xv.cols();
+        if let Some((dx, fresh)) = ctx.grad_fresh(x) {
+            gemm_ex(
+                dx.data_mut(),
+                wk,
+                rows,
+                wk,
+                g4,
+                &dz,
+                g4,
+                Tr::N,
+                &p[s.w_ih + off..],
+                s.input,
+                Tr::N,
+                !fresh,
+            );
+        }
+        off += wk;
     }
     crate::pool::recycle(dz);
     crate::pool::recycle(dh_next);
@@ -351,7 +403,10 @@ kern::simd_fn! {
             let (dzg, dzo) = rest.split_at_mut(h);
             let rr = r * h..(r + 1) * h;
             cell_backward_row(
-                [&gr[..h], &gr[h..2 * h], &gr[2 * h..3 * h], &gr[3 * h..]],
+                &gr[..h],
+                &gr[h..2 * h],
+                &gr[2 * h..3 * h],
+                &gr[3 * h..],
                 &tc[rr.clone()],
                 &c_prev[rr.clone()],
                 &dy[rr.clone()],
@@ -366,11 +421,14 @@ kern::simd_fn! {
     }
 }
 
-/// One row of [`cell_backward`] (separate slices so the loop vectorises).
+/// One row of [`cell_backward`] (one argument per slice, see [`cell_forward_row`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn cell_backward_row(
-    [gi, gf, gg, go]: [&[f32]; 4],
+    gi: &[f32],
+    gf: &[f32],
+    gg: &[f32],
+    go: &[f32],
     tc: &[f32],
     cp: &[f32],
     dy: &[f32],

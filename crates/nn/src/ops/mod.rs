@@ -34,9 +34,7 @@ pub(crate) fn backward(op: &Op, y: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '
                 }
             }
         }
-        Op::Linear { x, set, w, b, act } => {
-            linear::linear_backward(*x, *set, *w, *b, *act, y, dy, ctx)
-        }
+        Op::Linear(node) => linear::linear_backward(node, y, dy, ctx),
         Op::Lstm(node) => lstm::lstm_backward(node, y, dy, ctx),
         Op::Unary { x, f } => elementwise::unary_backward(*x, *f, y, dy, ctx),
         Op::Binary { a, b, f } => elementwise::binary_backward(*a, *b, *f, dy, ctx),

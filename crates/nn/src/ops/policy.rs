@@ -35,27 +35,39 @@ impl Graph<'_> {
         );
         let (n, a_dim) = mv.shape();
         let w = a_dim + 1;
+        let mut act = crate::pool::dirty(n * a_dim);
+        let mut term = crate::pool::dirty(n * a_dim);
+        sample_terms(mv.data(), sv.data(), eps.data(), &mut act, &mut term);
         let mut out = Tensor::uninit(n, w);
         for r in 0..n {
-            let (m, s, e) = (mv.row(r), sv.row(r), eps.row(r));
             let o = &mut out.data_mut()[r * w..(r + 1) * w];
-            let mut lp = 0.0f32;
-            for j in 0..a_dim {
-                let u = m[j] + s[j] * e[j];
-                o[j] = kern::tanh(u);
-                lp += -0.5 * e[j] * e[j]
-                    - s[j].ln()
-                    - HALF_LN_2PI
-                    - 2.0 * (LN2 - u - kern::softplus(-2.0 * u));
-            }
-            o[a_dim] = lp;
+            o[..a_dim].copy_from_slice(&act[r * a_dim..(r + 1) * a_dim]);
+            o[a_dim] = term[r * a_dim..(r + 1) * a_dim].iter().sum();
         }
+        crate::pool::recycle(act);
+        crate::pool::recycle(term);
         let rg = self.rg(mean) || self.rg(std);
         let both = self.push(out, Op::GaussianTanh { mean, std, eps }, rg);
         (
             self.slice_cols(both, 0, a_dim),
             self.slice_cols(both, a_dim, 1),
         )
+    }
+}
+
+kern::simd_fn! {
+    /// Per element: a = tanh(u), u = μ + σε, and the log-density term
+    /// −ε²/2 − log σ − log(2π)/2 − 2(log 2 − u − softplus(−2u)) (NaN for σ ≤ 0).
+    fn sample_terms<'a>(mean: &'a [f32], std: &'a [f32], eps: &'a [f32], act: &'a mut [f32], term: &'a mut [f32]) {
+        let n = act.len();
+        let (mean, std, eps, term) = (&mean[..n], &std[..n], &eps[..n], &mut term[..n]);
+        for k in 0..n {
+            let (m, s, e) = (mean[k], std[k], eps[k]);
+            let u = m + s * e;
+            act[k] = kern::tanh(u);
+            let log_s = if s > 0.0 { kern::ln(s) } else { f32::NAN };
+            term[k] = -0.5 * e * e - log_s - HALF_LN_2PI - 2.0 * (LN2 - u - kern::softplus(-2.0 * u));
+        }
     }
 }
 
