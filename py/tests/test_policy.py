@@ -48,6 +48,8 @@ def test_policy_matches_esrl_eval(cli_train: Callable[..., Path],
         ev = cli_eval(run, 2)
         mine = esrl_rs.load_policy(run).evaluate(episodes=2, seed=0)
         loaded = esrl_rs.load_eval(run)
+        assert mine["agent"] == ev["agent"] and mine["seed"] == ev["seed"] == 0
+        assert mine["mean"]["return"] == ev["mean"]["return"]
         for theirs, ours, typed in zip(ev["episodes"], mine["episodes"], loaded["episodes"]):
             assert ours["seed"] == theirs["seed"]
             assert ours["return"] == theirs["return"]
@@ -70,6 +72,23 @@ def test_walk_policy(cli_train: Callable[..., Path]) -> None:
     assert r["gait"]["actuator_names"][1] == "left_knee"
     env = policy.make_env()
     assert env.max_episode_steps == n or r["terminated"]
+    assert env.config == policy._core.walk_config
+
+
+def test_policy_evaluation_records_mcap(cli_train: Callable[..., Path], tmp_path: Path) -> None:
+    policy = esrl_rs.load_policy(cli_train("es-sac", *WALK))
+    ev = policy.evaluate(episodes=1, seed=4, record=tmp_path / "rec")
+    mcap = tmp_path / "rec" / "episode-000.mcap"
+    assert mcap.is_file()
+    n = ev["episodes"][0]["length"]
+    torque = esrl_rs.read_recording(mcap, "/esrl/joints/torque")
+    assert torque["time"].shape == (n,)
+    assert "left_knee" in torque and torque["left_knee"].shape == (n,)
+    np.testing.assert_allclose(torque["time"], ev["episodes"][0]["trace"]["time"], atol=1e-6)
+    topics = {c["topic"] for c in esrl_rs.recording_channels(mcap)}
+    assert {"/scene", "/tf", "/esrl/reward"} <= topics
+    with pytest.raises(ValueError, match="episodes=0"):
+        policy.evaluate(episodes=0)
 
 
 def test_policy_errors(tmp_path: Path) -> None:
@@ -81,6 +100,10 @@ def test_policy_errors(tmp_path: Path) -> None:
         esrl_rs.load_policy(tmp_path / "run")
     with pytest.raises(ValueError, match="neither a run folder"):
         esrl_rs.load_policy(tmp_path)
+    a_file = tmp_path / "file"
+    a_file.write_text("x")
+    with pytest.raises(ValueError, match="is a file"):
+        esrl_rs.load_policy(a_file)
 
 
 def test_policy_bad_config_and_obs(cli_train: Callable[..., Path], tmp_path: Path) -> None:

@@ -1,10 +1,10 @@
-"""Trained policies from run folders: act, estimate Q0 and roll out deterministically in Rust,
-with the networks, weights and episode loop of ``esrl eval``."""
+"""Trained policies from run folders: act step by step, estimate Q0, and evaluate with the
+CLI's own code (``esrl eval``: same loader, episode loop and ``eval.json`` structure)."""
 
 from __future__ import annotations
 
 import os
-from typing import Any, Dict, List, Union
+from typing import Any, Dict, List, Optional, Union
 
 import numpy as np
 
@@ -86,19 +86,24 @@ class Policy:
             return WalkEnv(self._core.walk_config)
         return Pendulum()
 
-    def rollout(self, seed: int = 0) -> Dict[str, Any]:
-        """One deterministic episode from ``reset(seed)`` in the run's environment:
-        ``{"seed", "return", "length", "terminated", "truncated", "q0"}``, plus ``"trace"``
-        and ``"gait"`` for walking runs (as in ``eval.json``)."""
-        return self._core.rollout(int(seed))
-
-    def evaluate(self, episodes: int = 1, seed: int = 0) -> Dict[str, Any]:
-        """``episodes`` rollouts with seeds ``seed, seed + 1, ...`` (as ``esrl eval``):
-        ``{"episodes": [...]}`` in the format of :func:`esrl_rs.load_eval`."""
-        if episodes < 1:
+    def evaluate(self, episodes: int = 1, seed: int = 0,
+                 record: Optional[Union[str, "os.PathLike[str]"]] = None) -> Dict[str, Any]:
+        """``esrl eval`` on this policy, run by the CLI's own Rust code: ``episodes``
+        deterministic episodes with seeds ``seed, seed + 1, ...`` (in parallel), each also
+        recorded to ``record/episode-NNN.mcap`` when ``record`` is a folder (walking runs).
+        Returns what ``eval.json`` holds (``run``, ``agent``, ``episodes`` with ``return``,
+        ``q0``, ``gait``, ``trace``, and ``mean``), number lists as NumPy arrays."""
+        if int(episodes) < 1:
             raise ValueError(f"episodes={episodes}: evaluate at least one episode")
-        eps: List[Dict[str, Any]] = [self.rollout(seed + k) for k in range(episodes)]
-        return {"episodes": eps}
+        if int(seed) < 0:
+            raise ValueError(f"seed={seed}: must be ≥ 0")
+        out = os.fspath(record) if record is not None else None
+        return self._core.evaluate(int(seed), int(episodes), out)
+
+    def rollout(self, seed: int = 0) -> Dict[str, Any]:
+        """One deterministic episode from ``reset(seed)``: ``evaluate(1, seed)``'s episode."""
+        episodes: List[Dict[str, Any]] = self.evaluate(1, seed)["episodes"]
+        return episodes[0]
 
 
 def load_policy(path: Union[str, "os.PathLike[str]"]) -> Policy:
