@@ -146,7 +146,7 @@ pub struct TrainArgs {
     /// Seed of every random stream in the run.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Run folder [default: runs/<agent>-<env>-s<seed>].
+    /// Run folder [default: `runs/<agent>-<env>-s<seed>`].
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Continue the run in DIR from its last checkpoint (its config.toml is used).
@@ -185,7 +185,7 @@ pub struct CompareArgs {
     /// Seeds per agent (0, 1, …).
     #[arg(long, default_value_t = 3)]
     pub seeds: u64,
-    /// Output folder: runs go to DIR/<agent>-s<seed>, the table to DIR/table.{md,csv}.
+    /// Output folder: runs go to `DIR/<agent>-s<seed>`, the table to `DIR/table.{md,csv}`.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Give every agent the same environment-step budget (that of one ES run of the preset)

@@ -113,7 +113,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
     match what {
         BenchWhat::Env { steps, json } => {
             let r = esrl_sim::bench::bench_walk(&esrl_sim::WalkConfig::default(), *steps, 0)?;
-            let text = format!("{}", serde_json::to_string_pretty(&r)?);
+            let text = serde_json::to_string_pretty(&r)?;
             emit(*json, &r, text)
         }
         BenchWhat::Nn { json } => {

@@ -58,7 +58,7 @@ pub struct CheckpointState {
 /// The training state a checkpoint holds: a plain trainer or a hybrid one.
 pub enum Learner {
     /// SAC / TD3 / DDPG.
-    Plain(Trainer),
+    Plain(Box<Trainer>),
     /// ES-SAC / ES-TD3 / ES-DDPG.
     Hybrid(Box<Hybrid>),
 }

@@ -30,8 +30,8 @@
 //! steps) matters because falls end most early episodes: the estimate is an upper bound that
 //! ES runs never spend.
 //!
-//! Ctrl-C stops the whole comparison at once; run it again to resume each run from its last
-//! checkpoint.
+//! Ctrl-C stops every training at its next generation/episode boundary with a checkpoint; run
+//! the same command again to resume them.
 
 use crate::args::{AgentKind, CompareArgs, Preset};
 use crate::config::TrainConfig;
@@ -382,12 +382,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     }
     let out = &args.out;
     fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    // Trainings in this process cannot each install a Ctrl-C handler; this one ends the
-    // whole comparison, which resumes from the checkpoints when run again.
-    let _ = ctrlc::set_handler(|| {
-        eprintln!("\ninterrupted: run the same command again to resume from the checkpoints");
-        std::process::exit(130);
-    });
+    // Ctrl-C stops every training at its next boundary with a checkpoint; running the same
+    // command again resumes them.
+    crate::train::install_stop_handler();
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
 
     let mut plans = Vec::new();

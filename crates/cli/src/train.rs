@@ -47,6 +47,19 @@ pub fn env_factory(cfg: &TrainConfig) -> Result<EnvFactory> {
     }
 }
 
+/// Set by Ctrl-C: every training in the process stops at its next generation/episode
+/// boundary, writes a checkpoint and returns.
+pub static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Installs the Ctrl-C handler that sets [`STOP`] (once per process; later calls do nothing).
+pub fn install_stop_handler() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // Failure only loses the graceful stop (another handler owns the signal).
+        let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
+    });
+}
+
 /// The RL algorithm behind an agent kind.
 pub fn algo_of(agent: AgentKind) -> Algo {
     match agent {
@@ -75,7 +88,7 @@ pub fn build_learner(cfg: &TrainConfig, make_env: &EnvFactory) -> Result<Learner
             cfg.seed,
         )))
     } else {
-        Learner::Plain(Trainer::new(agent, cfg.seed))
+        Learner::Plain(Box::new(Trainer::new(agent, cfg.seed)))
     })
 }
 
@@ -224,13 +237,8 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Re
         .build()
         .context("starting the rollout thread pool")?;
 
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = stop.clone();
-        // A second handler cannot be installed in the same process (tests); that only loses
-        // the graceful Ctrl-C, so it is not an error.
-        let _ = ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst));
-    }
+    install_stop_handler();
+    let stop = &STOP;
 
     let total = if cfg.agent.is_hybrid() {
         cfg.generations

@@ -239,7 +239,7 @@ mod tests {
         let wb = 3f64.ln() / (3f64.ln() + 1.5f64.ln());
         let wa = 1.0 - wb;
         assert!((f64::from(s.mean[0]) - (wb * 3.0 + wa * 1.0)).abs() < 1e-6);
-        assert!((f64::from(s.mean[1]) - (wb * -1.0 + wa * 2.0)).abs() < 1e-6);
+        assert!((f64::from(s.mean[1]) - (-wb + wa * 2.0)).abs() < 1e-6);
         assert!((s.sigma - 0.55).abs() < 1e-12, "σ = 0.5·1 + 0.5·0.1");
         assert_eq!(s.generation, 1);
     }
