@@ -84,6 +84,13 @@ impl PhysicsConfig {
                 "must be finite and ≥ 0",
             );
         }
+        if !(self.actuator_armature.is_finite() && self.actuator_armature >= 0.0) {
+            return bad(
+                "actuator_armature",
+                self.actuator_armature.to_string(),
+                "must be finite and ≥ 0",
+            );
+        }
         Ok(())
     }
 }
@@ -188,8 +195,10 @@ impl RobotSim {
     pub(crate) fn build(model: Arc<RobotModel>, setup: &SimSetup, state: &RobotState) -> Self {
         let root = model.root();
         let n_joints = model.joints().len();
-        let mut world = PhysicsWorld::default();
-        world.gravity = Vector::new(0.0, 0.0, -setup.physics.gravity);
+        let mut world = PhysicsWorld {
+            gravity: Vector::new(0.0, 0.0, -setup.physics.gravity),
+            ..PhysicsWorld::default()
+        };
         world.integration_parameters.dt = setup.dt;
         world.integration_parameters.num_solver_iterations =
             setup.physics.solver_iterations as usize;

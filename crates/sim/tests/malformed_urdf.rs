@@ -18,6 +18,9 @@ fn joint(name: &str, kind: &str, parent: &str, child: &str) -> String {
     )
 }
 
+/// Whether an error is the expected one.
+type Check = fn(&UrdfError) -> bool;
+
 fn robot(body: &str) -> String {
     format!(r#"<robot name="r">{body}</robot>"#)
 }
@@ -57,7 +60,7 @@ fn each_defect_gets_its_error() {
         )
     };
 
-    let cases: Vec<(&str, String, fn(&UrdfError) -> bool)> = vec![
+    let cases: Vec<(&str, String, Check)> = vec![
         ("not xml", "this is not a robot".into(), |e| {
             matches!(e, UrdfError::Parse(_))
         }),
