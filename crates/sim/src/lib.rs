@@ -55,14 +55,19 @@
 //!
 //! | solver iterations (× 1 step of 25 ms) | 1 | 2 | 3 | 4 | 8 |
 //! |---|---|---|---|---|---|
-//! | 60 s PD standing, max torso drift (< 5 cm required) | 4.2 cm | 1.0 cm | – | 1.0 cm | – |
-//! | worst joint-limit overshoot at full effort, armature 0.1 (< 6° required) | > 90° | 13° | 17° | 4.9° | – |
-//! | same, armature 0 | 200° | 88° | – | 23° | 6.4° |
-//! | control steps/s, random actions, one core | ~11k | ~8k | – | ~6k | ~3k |
+//! | 60 s PD standing, max torso drift (< 5 cm required) | 3.4 cm | 1.4 cm | 1.4 cm | 1.4 cm | 1.4 cm |
+//! | worst joint-limit overshoot, full effort, armature 0.1 (< 6° required) | 68° | 11° | 17° | 4.9° | 3.6° |
+//! | same without armature | 208° | 88° | 60° | 35° | 6.8° |
+//! | control steps/s, random actions, one core (approx.) | 12k | 8k | 6k | 5–7k | 3k |
+//!
+//! (`cargo run --release -p esrl-sim --example physics_table` reproduces the table; the
+//! throughput varies by ±20 % with the load of the 2 shared cores it was measured on.
+//! `cargo run --release -p esrl-sim --example bench_env -- 30000` or `esrl bench env` measure
+//! the default settings alone.)
 //!
 //! Substeps (several Rapier steps per control period) cost more than solver iterations for
 //! the same integrator step (collision detection runs each step) and gave nothing the
-//! iterations do not. One iteration already stands still, so stability is not what bounds the
+//! iterations do not. One iteration already stands still, so standing is not what bounds the
 //! step: joint limits are (next section). Throughput is bounded by Rapier's multibody
 //! dynamics: about 55 % of the time goes into assembling the 16 × 16 joint-space mass matrix
 //! (`Multibody::update_mass_matrix`, dense nalgebra `quadform` per link) at every solver
