@@ -9,7 +9,8 @@ shapes, single thread, so the two can be compared like with like.
           loss = MSE(q, y)
   mlp_* : the same with Linear 256x256 (ReLU) trunks and no LSTM, on B transitions.
 
-Each figure: median of --reps timings (ms) after --warmup runs, torch.set_num_threads(1),
+Each figure: median of --reps timings (ms) after --warmup runs (the minimum in min_ms, and the median on-CPU
+time of the thread, from /proc/thread-self/schedstat, in cpu_ms), torch.set_num_threads(1),
 process pinned to one CPU. Prints one JSON object.
 
     python crates/nn/scripts/torch_nn_bench.py [--obs 43] [--act 6] [--batch 256] [--seq 8]
@@ -95,14 +96,30 @@ def main():
     def nparams(m):
         return sum(p.numel() for p in m.parameters())
 
-    def timeit(fn, reps, warmup):
+    mins, cpus = {}, {}
+
+    def thread_cpu_ns():
+        try:
+            with open("/proc/thread-self/schedstat") as f:
+                return int(f.read().split()[0])
+        except OSError:
+            return None
+
+    def timeit(fn, reps, warmup, name):
         for _ in range(warmup):
             fn()
-        v = []
+        v, c = [], []
         for _ in range(reps):
+            c0 = thread_cpu_ns()
             t0 = time.perf_counter()
             fn()
             v.append((time.perf_counter() - t0) * 1e3)
+            c1 = thread_cpu_ns()
+            if c0 is not None and c1 is not None:
+                c.append((c1 - c0) / 1e6)
+        mins[name] = round(min(v), 3)
+        if len(c) == len(v):
+            cpus[name] = round(statistics.median(c), 3)
         return statistics.median(v)
 
     res = {"bench": "torch_nn_fwd_bwd", "torch": torch.__version__, "obs_dim": O, "act_dim": A,
@@ -125,8 +142,10 @@ def main():
         k = 1 if rec else 5
         res[tag + "actor_params"] = nparams(actor)
         res[tag + "critic_params"] = nparams(critic)
-        res[tag + "actor_ms"] = round(timeit(actor_step, a.reps * k, a.warmup * k), 3)
-        res[tag + "critic_ms"] = round(timeit(critic_step, a.reps * k, a.warmup * k), 3)
+        res[tag + "actor_ms"] = round(timeit(actor_step, a.reps * k, a.warmup * k, tag + "actor"), 3)
+        res[tag + "critic_ms"] = round(timeit(critic_step, a.reps * k, a.warmup * k, tag + "critic"), 3)
+    res["min_ms"] = mins
+    res["cpu_ms"] = cpus
     print(json.dumps(res), flush=True)
 
 

@@ -75,6 +75,16 @@ pub struct BenchReport {
     pub sac_update_ms: Option<f64>,
     /// One full SAC update with the MLP networks (if measured).
     pub mlp_sac_update_ms: Option<f64>,
+    /// Fastest repetition of each figure above (ms), keyed like the fields (`actor`,
+    /// `critic`, `mlp_actor`, `mlp_critic`, `sac_update`, `mlp_sac_update`): the least
+    /// disturbed by other load on the machine.
+    pub min_ms: std::collections::BTreeMap<String, f64>,
+    /// Mean time this thread actually ran on a CPU per repetition (ms, Linux
+    /// `/proc/thread-self/schedstat`, total over the repetitions / reps since the kernel may
+    /// count in scheduler ticks; empty elsewhere), same keys: unlike wall time it does not
+    /// grow when other processes take turns on the core, so it compares runs taken on a busy
+    /// machine.
+    pub cpu_ms: std::collections::BTreeMap<String, f64>,
     /// Threads used (always 1).
     pub threads: usize,
 }
@@ -89,19 +99,42 @@ fn randn(rows: usize, cols: usize, rng: &mut ChaCha8Rng) -> Tensor {
     )
 }
 
-fn median_ms(reps: usize, warmup: usize, mut f: impl FnMut()) -> f64 {
+/// Nanoseconds this thread has spent on a CPU (Linux), if readable.
+fn thread_cpu_ns() -> Option<u64> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    s.split_whitespace().next()?.parse().ok()
+}
+
+/// Timing of one figure: wall median and minimum, on-CPU median (ms).
+struct Timing {
+    median: f64,
+    min: f64,
+    cpu: Option<f64>,
+}
+
+/// Times `reps` runs of `f` after `warmup` untimed ones.
+fn time_ms(reps: usize, warmup: usize, mut f: impl FnMut()) -> Timing {
     for _ in 0..warmup {
         f();
     }
-    let mut v: Vec<f64> = (0..reps.max(1))
-        .map(|_| {
-            let t0 = Instant::now();
-            f();
-            t0.elapsed().as_secs_f64() * 1e3
-        })
-        .collect();
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
+    let reps = reps.max(1);
+    let mut wall = Vec::with_capacity(reps);
+    let c0 = thread_cpu_ns();
+    for _ in 0..reps {
+        let t0 = Instant::now();
+        f();
+        wall.push(t0.elapsed().as_secs_f64() * 1e3);
+    }
+    let cpu = match (c0, thread_cpu_ns()) {
+        (Some(a), Some(b)) => Some(b.saturating_sub(a) as f64 / 1e6 / reps as f64),
+        _ => None,
+    };
+    wall.sort_by(|a, b| a.total_cmp(b));
+    Timing {
+        median: wall[wall.len() / 2],
+        min: wall[0],
+        cpu,
+    }
 }
 
 /// Forward + backward of an actor on (rows, obs) with a SAC-like loss mean(log π − Σa).
@@ -302,40 +335,65 @@ pub fn run(config: &BenchConfig) -> Result<BenchReport, NnError> {
     let flat = batch(b, b, od, ad, &mut rng);
     let mut sink = 0.0f32;
     let (reps, warm) = (config.reps, config.warmup);
-    let actor_ms = median_ms(reps, warm, || {
-        sink += actor_fwd_bwd(&actor, &seq.obs, b, &mut rng)
-    });
-    let critic_ms = median_ms(reps, warm, || {
-        sink += critic_fwd_bwd(&critic, &seq.obs, &seq.act, &seq.rew, b)
-    });
-    let mlp_actor_ms = median_ms(reps * 5, warm * 5, || {
-        sink += actor_fwd_bwd(&mlp_actor, &flat.obs, b, &mut rng)
-    });
-    let mlp_critic_ms = median_ms(reps * 5, warm * 5, || {
-        sink += critic_fwd_bwd(&mlp_critic, &flat.obs, &flat.act, &flat.rew, b)
-    });
+    let mut min_ms = std::collections::BTreeMap::new();
+    let mut cpu_ms = std::collections::BTreeMap::new();
+    let mut record = |name: &str, t: Timing| {
+        min_ms.insert(name.to_string(), t.min);
+        if let Some(c) = t.cpu {
+            cpu_ms.insert(name.to_string(), c);
+        }
+        t.median
+    };
+    let actor_ms = record(
+        "actor",
+        time_ms(reps, warm, || {
+            sink += actor_fwd_bwd(&actor, &seq.obs, b, &mut rng)
+        }),
+    );
+    let critic_ms = record(
+        "critic",
+        time_ms(reps, warm, || {
+            sink += critic_fwd_bwd(&critic, &seq.obs, &seq.act, &seq.rew, b)
+        }),
+    );
+    let mlp_actor_ms = record(
+        "mlp_actor",
+        time_ms(reps * 5, warm * 5, || {
+            sink += actor_fwd_bwd(&mlp_actor, &flat.obs, b, &mut rng)
+        }),
+    );
+    let mlp_critic_ms = record(
+        "mlp_critic",
+        time_ms(reps * 5, warm * 5, || {
+            sink += critic_fwd_bwd(&mlp_critic, &flat.obs, &flat.act, &flat.rew, b)
+        }),
+    );
     let (mut sac_update_ms, mut mlp_sac_update_ms) = (None, None);
     if config.sac_update {
-        let mut sac = Sac::new(od, ad, &ActorConfig::paper(), &CriticConfig::paper())?;
         let mut err = Ok(());
-        sac_update_ms = Some(median_ms(reps, warm, || {
-            if let Err(e) = sac.update(&seq) {
-                err = Err(e);
-            }
-        }));
-        err?;
+        let mut sac = Sac::new(od, ad, &ActorConfig::paper(), &CriticConfig::paper())?;
+        sac_update_ms = Some(record(
+            "sac_update",
+            time_ms(reps, warm, || {
+                if let Err(e) = sac.update(&seq) {
+                    err = Err(e);
+                }
+            }),
+        ));
         let mut sac = Sac::new(
             od,
             ad,
             &ActorConfig::feed_forward(),
             &CriticConfig::feed_forward(),
         )?;
-        let mut err = Ok(());
-        mlp_sac_update_ms = Some(median_ms(reps * 5, warm * 5, || {
-            if let Err(e) = sac.update(&flat) {
-                err = Err(e);
-            }
-        }));
+        mlp_sac_update_ms = Some(record(
+            "mlp_sac_update",
+            time_ms(reps * 5, warm * 5, || {
+                if let Err(e) = sac.update(&flat) {
+                    err = Err(e);
+                }
+            }),
+        ));
         err?;
     }
     std::hint::black_box(sink);
@@ -351,6 +409,34 @@ pub fn run(config: &BenchConfig) -> Result<BenchReport, NnError> {
         mlp_critic_ms,
         sac_update_ms,
         mlp_sac_update_ms,
+        min_ms,
+        cpu_ms,
         threads: 1,
     })
+}
+
+/// Runs `iters` SAC updates of the recurrent (or feed-forward) networks on one fixed batch and
+/// returns the mean wall time in ms (for profiling the full update; not part of the report).
+#[doc(hidden)]
+pub fn sac_update_loop(
+    config: &BenchConfig,
+    recurrent: bool,
+    iters: usize,
+) -> Result<f64, NnError> {
+    let (od, ad, b) = (config.obs_dim, config.act_dim, config.batch);
+    let rows = if recurrent { b * config.seq_len } else { b };
+    let mut rng = ChaCha8Rng::seed_from_u64(0);
+    let data = batch(rows, b, od, ad, &mut rng);
+    let (acfg, ccfg) = if recurrent {
+        (ActorConfig::paper(), CriticConfig::paper())
+    } else {
+        (ActorConfig::feed_forward(), CriticConfig::feed_forward())
+    };
+    let mut sac = Sac::new(od, ad, &acfg, &ccfg)?;
+    sac.update(&data)?;
+    let t0 = Instant::now();
+    for _ in 0..iters {
+        sac.update(&data)?;
+    }
+    Ok(t0.elapsed().as_secs_f64() * 1e3 / iters.max(1) as f64)
 }

@@ -105,12 +105,7 @@ pub struct Adam {
 /// Scales `grads` (several buffers seen as one vector) so that their global L2 norm is at most
 /// `max_norm`; returns the norm before scaling. Non-finite norms are returned unscaled.
 pub fn clip_grad_norm(grads: &mut [&mut [f32]], max_norm: f32) -> f32 {
-    let norm = grads
-        .iter()
-        .flat_map(|g| g.iter())
-        .map(|&x| (x as f64) * (x as f64))
-        .sum::<f64>()
-        .sqrt() as f32;
+    let norm = grads.iter().map(|g| sum_sq(g)).sum::<f64>().sqrt() as f32;
     if norm.is_finite() && norm > max_norm {
         let k = max_norm / norm;
         grads
@@ -199,11 +194,7 @@ impl Adam {
         }
         let norm = match self.config.grad_clip {
             Some(c) => clip_grad_norm(&mut [grad], c),
-            None => grad
-                .iter()
-                .map(|&x| (x as f64) * (x as f64))
-                .sum::<f64>()
-                .sqrt() as f32,
+            None => sum_sq(grad).sqrt() as f32,
         };
         if !norm.is_finite() {
             return Err(NnError::NonFiniteGradient {
@@ -236,6 +227,32 @@ impl Adam {
             k,
         );
         Ok(norm)
+    }
+}
+
+/// Σ x² accumulated in f64 (8 fixed lanes, so the result does not depend on the SIMD level).
+fn sum_sq(x: &[f32]) -> f64 {
+    let mut acc = [0.0f64; 8];
+    sum_sq_lanes(x, &mut acc);
+    acc.iter().sum()
+}
+
+crate::kern::simd_fn! {
+    /// acc[k] += Σ_j x[8j + k]² in f64.
+    fn sum_sq_lanes<'a>(x: &'a [f32], acc: &'a mut [f64; 8]) {
+        let mut a = *acc;
+        let chunks = x.chunks_exact(8);
+        let rest = chunks.remainder();
+        for c in chunks {
+            for k in 0..8 {
+                let v = c[k] as f64;
+                a[k] += v * v;
+            }
+        }
+        for (k, &v) in rest.iter().enumerate() {
+            a[k] += (v as f64) * (v as f64);
+        }
+        *acc = a;
     }
 }
 
