@@ -133,8 +133,9 @@ fn parse_csv(path: &Path) -> PyResult<Vec<Map<String, Value>>> {
     Ok(rows)
 }
 
-/// Column name → values: `int64` arrays for integer columns without gaps, `float64` arrays
-/// (null or missing → NaN) for other numeric columns (booleans count as 0/1), lists otherwise.
+/// Column name → values: `bool` arrays for boolean columns without gaps, `int64` arrays for
+/// integer columns without gaps, `float64` arrays (null or missing → NaN; booleans → 0/1) for
+/// other numeric columns, lists otherwise.
 fn columns_to_py<'py>(
     py: Python<'py>,
     rows: &[Map<String, Value>],
@@ -149,6 +150,14 @@ fn columns_to_py<'py>(
     }
     let dict = PyDict::new(py);
     for name in &names {
+        let bools: Option<Vec<bool>> = rows
+            .iter()
+            .map(|r| r.get(name).and_then(Value::as_bool))
+            .collect();
+        if let Some(bools) = bools {
+            dict.set_item(name, PyArray1::from_vec(py, bools))?;
+            continue;
+        }
         let values: Vec<Value> = rows
             .iter()
             .map(|r| match r.get(name) {

@@ -42,7 +42,11 @@ def test_rows_with_extra_and_missing_keys(tmp_path: Path) -> None:
     np.testing.assert_array_equal(run.curve, [1.0, 2.0, 3.0])
     assert np.isnan(run.metrics["return"][2])  # missing → NaN
     assert run.metrics["note"] == [None, None, "late"]  # a non-numeric column is a list
-    np.testing.assert_array_equal(run.metrics["flag"][2], 1.0)
+    # a boolean column with gaps is 0/1 with NaN; one without gaps is a bool array
+    assert np.isnan(run.metrics["flag"][0]) and run.metrics["flag"][2] == 1.0
+    (root / "metrics.jsonl").write_text('{"curve": 1, "ok": true}\n{"curve": 2, "ok": false}\n')
+    run = esrl_rs.load_run(root)
+    assert run.metrics["ok"].dtype == np.bool_ and run.metrics["ok"].tolist() == [True, False]
 
 
 def test_csv_fallback_and_partial_last_line(tmp_path: Path) -> None:
