@@ -16,7 +16,7 @@ use crate::convert::json_to_py;
 use crate::errors::{esrl_error, panic_message, sim_error, value_error};
 use crate::metrics::from_py;
 
-/// Which task, with what the Python side needs to describe it.
+/// The Rust environment and whether it may step.
 struct Task {
     env: Box<dyn Env>,
     /// Needs a reset before stepping (new, or after a caught panic).
