@@ -1,8 +1,9 @@
 //! Scalar math written so that LLVM vectorises it, and a SIMD dispatch helper.
 //!
-//! `std`'s `exp` is a library call that stops auto-vectorisation; the LSTM gates need millions
-//! of sigmoids and tanhs per update, so [`exp`] here is a Cephes-style polynomial made only of
-//! multiplies, adds and bit casts (no FMA, so the result is the same on every code path).
+//! `std`'s `exp` and `tanh` are library calls that stop auto-vectorisation; the LSTM gates need
+//! millions of sigmoids and tanhs per update, so [`tanh`] here is a rational function and
+//! [`exp`], [`ln`] Cephes-style polynomials, made only of multiplies, adds, divisions and bit
+//! casts (no FMA, so the result is the same on every code path).
 //! [`simd_fn!`] compiles a function body inside `pulp`'s runtime dispatch so its loops use the
 //! best instruction set the CPU has (AVX2+FMA on x86-64) without `unsafe` here.
 
@@ -69,16 +70,32 @@ pub(crate) fn exp(x: f32) -> f32 {
     p * f32::from_bits(((ni + 127) << 23) as u32)
 }
 
-/// σ(x) = 1 / (1 + e^(−x)).
+/// σ(x) = (1 + tanh(x/2)) / 2.
 #[inline(always)]
 pub(crate) fn sigmoid(x: f32) -> f32 {
-    1.0 / (1.0 + exp(-x))
+    0.5 + 0.5 * tanh(0.5 * x)
 }
 
-/// tanh(x) = 1 − 2 / (e^(2x) + 1) (absolute error ≈ 1e-7).
+/// tanh(x) as a rational function x·P(x²)/Q(x²) on [−7.9, 7.9] (Eigen's float tanh,
+/// error ≈ 1 ulp; saturates to ±1 beyond).
 #[inline(always)]
 pub(crate) fn tanh(x: f32) -> f32 {
-    1.0 - 2.0 / (exp(2.0 * x) + 1.0)
+    let x = x.clamp(-7.905_311, 7.905_311);
+    let x2 = x * x;
+    let mut p = -2.760_768_5e-16f32;
+    for c in [
+        2.000_188e-13,
+        -8.604_672e-11,
+        5.122_297e-8,
+        1.485_722_4e-5,
+        6.372_619_3e-4,
+        4.893_524_6e-3,
+    ] {
+        p = p * x2 + c;
+    }
+    let p = p * x;
+    let q = ((1.198_258_4e-6 * x2 + 1.185_347e-4) * x2 + 2.268_434_6e-3) * x2 + 4.893_525e-3;
+    p / q
 }
 
 /// Natural log for finite x > 0 (Cephes `logf`: x = m·2ᵉ, m ∈ [√½, √2), a degree-8
