@@ -69,6 +69,11 @@ pub(crate) enum Op {
         x: Var,
         s: f32,
     },
+    Clamp {
+        x: Var,
+        lo: f32,
+        hi: f32,
+    },
     AddScalar {
         x: Var,
     },

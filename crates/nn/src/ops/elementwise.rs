@@ -66,6 +66,19 @@ impl Graph<'_> {
         self.push(out, Op::Scale { x, s }, rg)
     }
 
+    /// `min(max(x, lo), hi)` (TD3's target smoothing, action bounds). Derivative: 1 where
+    /// lo < x < hi, else 0.
+    pub fn clamp(&mut self, x: Var, lo: f32, hi: f32) -> Var {
+        let xv = self.value(x);
+        let out = Tensor::from_vec(
+            xv.rows(),
+            xv.cols(),
+            xv.data().iter().map(|v| v.clamp(lo, hi)).collect(),
+        );
+        let rg = self.rg(x);
+        self.push(out, Op::Clamp { x, lo, hi }, rg)
+    }
+
     /// `x + s` for a constant `s`. Derivative: 1.
     pub fn add_scalar(&mut self, x: Var, s: f32) -> Var {
         let xv = self.value(x);
@@ -245,6 +258,18 @@ pub(crate) fn scale_backward(x: Var, s: f32, dy: &Tensor, ctx: &mut BackCtx<'_, 
     if let Some(dx) = ctx.grad(x) {
         for (g, d) in dx.data_mut().iter_mut().zip(dy.data()) {
             *g += s * d;
+        }
+    }
+}
+
+/// dx += dy where lo < x < hi.
+pub(crate) fn clamp_backward(x: Var, lo: f32, hi: f32, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+    let xv = ctx.val(x);
+    if let Some(dx) = ctx.grad(x) {
+        for ((g, &d), &v) in dx.data_mut().iter_mut().zip(dy.data()).zip(xv.data()) {
+            if v > lo && v < hi {
+                *g += d;
+            }
         }
     }
 }

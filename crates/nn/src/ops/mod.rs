@@ -39,6 +39,7 @@ pub(crate) fn backward(op: &Op, y: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '
         Op::Unary { x, f } => elementwise::unary_backward(*x, *f, y, dy, ctx),
         Op::Binary { a, b, f } => elementwise::binary_backward(*a, *b, *f, dy, ctx),
         Op::Scale { x, s } => elementwise::scale_backward(*x, *s, dy, ctx),
+        Op::Clamp { x, lo, hi } => elementwise::clamp_backward(*x, *lo, *hi, dy, ctx),
         Op::AddScalar { x } => elementwise::scale_backward(*x, 1.0, dy, ctx),
         Op::ConcatCols { a, b } => shape::concat_backward(*a, *b, dy, ctx),
         Op::SliceCols { x, start } => shape::slice_backward(*x, *start, dy, ctx),
