@@ -3,7 +3,8 @@
 //! # Observation (43 values for the embedded humanoid)
 //!
 //! Sizes follow the model: `n_a` actuated joints, `n_p` passive (non-actuated, movable)
-//! joints, in URDF order. All values are SI, f32; "body frame" is the torso link frame.
+//! joints, in URDF order. All values are SI before scaling (see Scaling below), f32; "body
+//! frame" is the torso link frame.
 //!
 //! | index (humanoid) | size | quantity |
 //! |---|---|---|
@@ -21,6 +22,29 @@
 //! | 37–42 | `n_a` | previous action (the clamped action of the last step; 0 after reset) |
 //!
 //! [`WalkEnv::obs_layout`] gives the ranges and [`WalkEnv::obs_names`] a name per index.
+//!
+//! ## Scaling (`normalize_obs`, default on)
+//!
+//! With [`WalkConfig::normalize_obs`] on, every entry above is multiplied by a fixed factor
+//! ([`WalkEnv::obs_scale`]) so that each is of order one for the networks:
+//!
+//! | quantity | factor | raw spread it tames (std over zero- and random-torque rollouts) |
+//! |---|---|---|
+//! | height error, lateral offset | 10 (1 = 0.1 m) | 0.07–0.1 m |
+//! | orientation quaternion | 1 | 0.01–0.2 |
+//! | linear velocity | 1 (m/s) | 0.07–0.7 m/s |
+//! | angular velocity | 0.5 (1 = 2 rad/s) | 0.1–2.1 rad/s |
+//! | linear acceleration | 0.1 (1 ≈ g) | 1.5–20 m/s², peaks 160 m/s² |
+//! | actuated joint angles | 1 (rad) | 0.1–0.7 rad |
+//! | actuated joint velocities | 0.1 (1 = 10 rad/s) | 2–9 rad/s, peaks 40 rad/s |
+//! | passive joint angles | 1 (rad) | 0.01–0.3 rad |
+//! | passive joint velocities | 0.5 (1 = 2 rad/s) | 0.1–1.5 rad/s |
+//! | foot forces / weight, previous action | 1 | 0.6–1 |
+//!
+//! The spreads come from `cargo run --release -p esrl-sim --example obs_stats -- 10000 raw`
+//! (the robot falls within about 0.6 s under zero or random torques, so these are the states
+//! early training sees). The factors are constants, not running statistics, so a policy
+//! means the same thing in every run and checkpoint. Turn it off for the raw SI values above.
 //!
 //! # Reward (paper eq. 12)
 //!
@@ -144,6 +168,10 @@ pub struct WalkConfig {
     pub fall: FallConfig,
     /// Reset noise.
     pub init_noise: InitNoise,
+    /// Multiply the observation by the fixed per-quantity factors of the module docs
+    /// ([`WalkEnv::obs_scale`]) so every entry is of order one. Default true (esrl's choice:
+    /// the raw values span three orders of magnitude, accelerations reach 160 m/s²).
+    pub normalize_obs: bool,
     /// Torque-controlled joints, in action order. Default the six leg joints `left_hip,
     /// left_knee, left_ankle, right_hip, right_knee, right_ankle` (SPEC §1).
     pub actuated_joints: Vec<String>,
@@ -175,6 +203,7 @@ impl Default for WalkConfig {
             reward: RewardConfig::default(),
             fall: FallConfig::default(),
             init_noise: InitNoise::default(),
+            normalize_obs: true,
             actuated_joints: [
                 "left_hip",
                 "left_knee",
@@ -330,6 +359,22 @@ impl ObsLayout {
             len: at,
         }
     }
+
+    /// The factor each index is multiplied by when `normalize_obs` is on (module docs).
+    fn scale(&self) -> Vec<f32> {
+        let mut s = vec![1.0; self.len];
+        s[self.height_error] = 10.0;
+        s[self.lateral_offset] = 10.0;
+        for (range, f) in [
+            (&self.angular_velocity, 0.5),
+            (&self.acceleration, 0.1),
+            (&self.joint_velocities, 0.1),
+            (&self.passive_velocities, 0.5),
+        ] {
+            s[range.clone()].fill(f);
+        }
+        s
+    }
 }
 
 /// Everything a [`WalkEnv`] shares with its siblings: the parsed model and resolved names.
@@ -349,6 +394,8 @@ struct WalkShared {
     setup: SimSetup,
     max_steps: usize,
     layout: ObsLayout,
+    /// Per-index observation factor (all 1 when `normalize_obs` is off).
+    obs_scale: Vec<f32>,
 }
 
 /// The walking task. See the [module docs](self) for observation, reward and episode.
@@ -471,6 +518,11 @@ impl WalkEnv {
             .collect();
         let weight = (model.total_mass() * config.physics.gravity as f64) as f32;
         let layout = ObsLayout::new(actuated.len(), passive.len());
+        let obs_scale = if config.normalize_obs {
+            layout.scale()
+        } else {
+            vec![1.0; layout.len]
+        };
         let state = RobotState {
             base_position: [0.0, 0.0, standing_height],
             q: standing_q.clone(),
@@ -492,6 +544,7 @@ impl WalkEnv {
             setup,
             max_steps,
             layout,
+            obs_scale,
         });
         Ok(Self {
             shared,
@@ -601,6 +654,13 @@ impl WalkEnv {
         &self.shared.layout
     }
 
+    /// The factor every observation index is multiplied by: the module docs' table when
+    /// [`WalkConfig::normalize_obs`] is on, all 1 otherwise. Divide an observation by it for
+    /// the SI values.
+    pub fn obs_scale(&self) -> &[f32] {
+        &self.shared.obs_scale
+    }
+
     /// A name for every observation index, e.g. `joint_angle/left_knee`.
     pub fn obs_names(&self) -> Vec<String> {
         let s = &self.shared;
@@ -684,6 +744,9 @@ impl WalkEnv {
                 .map(|&f| self.sim.ground_normal_force(f) / s.weight),
         );
         obs.extend(self.prev_action.iter().copied());
+        for (o, f) in obs.iter_mut().zip(&s.obs_scale) {
+            *o *= f;
+        }
         obs
     }
 }

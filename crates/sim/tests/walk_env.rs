@@ -9,8 +9,13 @@
 
 use esrl_sim::{Env, GaitSample, SimError, Step, WalkConfig, WalkEnv};
 
+/// The raw (SI) observation: the layout tests below check units and frames.
 fn env() -> WalkEnv {
-    WalkEnv::new(WalkConfig::default()).unwrap()
+    WalkEnv::new(WalkConfig {
+        normalize_obs: false,
+        ..WalkConfig::default()
+    })
+    .unwrap()
 }
 
 fn rotate(q: &[f32], v: [f32; 3]) -> [f32; 3] {
@@ -461,4 +466,50 @@ fn recording_data_put_the_feet_on_the_ground() {
     assert!(lowest.abs() < 2e-3, "lowest box corner at z = {lowest}");
     let _ = serde_json::to_string(&geometry).unwrap();
     let _ = serde_json::to_string(&poses).unwrap();
+}
+
+#[test]
+fn normalized_observation_is_the_raw_one_times_the_documented_factors() {
+    // The table of the module docs, written out index by index for the humanoid.
+    let mut want = vec![10.0, 10.0]; // height error, lateral offset: 1 = 0.1 m
+    want.extend([1.0; 4]); // quaternion
+    want.extend([1.0; 3]); // linear velocity, m/s
+    want.extend([0.5; 3]); // angular velocity: 1 = 2 rad/s
+    want.extend([0.1; 3]); // acceleration: 1 = 10 m/s²
+    want.extend([1.0; 6]); // joint angles, rad
+    want.extend([0.1; 6]); // joint velocities: 1 = 10 rad/s
+    want.extend([1.0; 4]); // passive angles, rad
+    want.extend([0.5; 4]); // passive velocities: 1 = 2 rad/s
+    want.extend([1.0; 2]); // foot forces / weight
+    want.extend([1.0; 6]); // previous action
+    assert_eq!(want.len(), 43);
+    let mut scaled = WalkEnv::new(WalkConfig::default()).unwrap();
+    assert!(scaled.config().normalize_obs, "on by default");
+    assert_eq!(scaled.obs_scale(), want.as_slice());
+    let mut raw = env();
+    assert!(raw.obs_scale().iter().all(|&f| f == 1.0));
+    let check = |o_raw: &[f32], o_scaled: &[f32]| {
+        for i in 0..43 {
+            assert_eq!(o_scaled[i], o_raw[i] * want[i], "index {i}");
+        }
+    };
+    check(&raw.reset(3), &scaled.reset(3));
+    let mut seen_large = false;
+    for k in 0..20 {
+        let a = [0.8, -0.6, 0.4, -0.8, 0.6, -0.4].map(|v| if k % 2 == 0 { v } else { -v });
+        let (r, s) = (raw.step(&a), scaled.step(&a));
+        check(&r.obs, &s.obs);
+        assert_eq!(
+            r.reward, s.reward,
+            "the reward does not depend on the scaling"
+        );
+        seen_large |= r.obs.iter().any(|v| v.abs() > 5.0);
+        if r.terminated {
+            break;
+        }
+    }
+    assert!(
+        seen_large,
+        "raw entries beyond 5 exist for the scaling to tame"
+    );
 }
