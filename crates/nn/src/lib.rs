@@ -119,9 +119,45 @@
 //! q2_t.params_mut().polyak_update(q2.params(), tau).unwrap();
 //! ```
 //!
+//! # Checkpoint tensors
+//!
+//! [`save_params`] writes F32 little-endian tensors with PyTorch shapes under stable names
+//! (optionally behind a per-network prefix such as `actor.`). For the walking env (obs 43,
+//! act 6) and the default configs:
+//!
+//! | actor | shape | critic | shape |
+//! |---|---|---|---|
+//! | `fc.0.weight` | (256, 43) | `obs_fc.0.weight` | (128, 43) |
+//! | `fc.0.bias` | (256) | `obs_fc.0.bias` | (128) |
+//! | `lstm.weight_ih` | (400, 256) | `act_fc.0.weight` | (128, 6) |
+//! | `lstm.weight_hh` | (400, 100) | `act_fc.0.bias` | (128) |
+//! | `lstm.bias` | (400) | `lstm.weight_ih` | (448, 256) |
+//! | `mean.weight` | (6, 100) | `lstm.weight_hh` | (448, 112) |
+//! | `mean.bias` | (6) | `lstm.bias` | (448) |
+//! | `std.weight` | (6, 100) | `q.weight` | (1, 112) |
+//! | `std.bias` | (6) | `q.bias` | (1) |
+//!
+//! LSTM gate blocks are PyTorch's [i; f; g; o]; load into `nn.LSTM` with
+//! `weight_ih_l0 = lstm.weight_ih`, `weight_hh_l0 = lstm.weight_hh`, `bias_ih_l0 = lstm.bias`,
+//! `bias_hh_l0 = 0` (`scripts/torch_parity.py` does exactly this and agrees to ~1e-7). The
+//! flat vector ([`Params::as_slice`]) concatenates the tensors in [`Params::specs`] order.
+//! Feed-forward variants name their layers `fc.{k}` (actor) and `fc.{k}` after the
+//! concatenated input (critic).
+//!
+//! # Speed
+//!
+//! All products are faer's (AVX-512/AVX2 kernels chosen at runtime), single-threaded; the
+//! LSTM's input projection for all T steps is one product, BPTT runs inside one op, the
+//! cell's nonlinearities are vectorised rational/polynomial approximations, and large
+//! buffers are recycled through a per-thread pool so steady-state updates do not fault pages
+//! in. [`bench::run`] measures the paper networks; `scripts/compare.sh` times PyTorch on the
+//! same shapes in the same session.
+//!
 //! # Limitations
 //!
 //! - f32 only, 2-D tensors only; sequences are time-major matrices.
+//! - Results are bit-identical run to run and independent of the thread count, but not
+//!   across CPUs with different SIMD widths (faer picks different kernels).
 //! - One LSTM layer per network and one bias vector per LSTM (PyTorch has two; load ours
 //!   into PyTorch as `bias_ih = bias`, `bias_hh = 0`).
 //! - Single-threaded by design: parallelism belongs to the rollouts and the population.
