@@ -91,6 +91,9 @@ pub fn update_ms(arch: Arch, reps: usize) -> Result<serde_json::Value> {
     }))
 }
 
+/// Generations timed by `bench es` (without gradient updates, so the policies stay random).
+const ES_BENCH_GENERATIONS: usize = 5;
+
 /// Times one ES generation's evaluation (no gradient updates) at `threads` threads.
 fn es_generation_s(preset: Preset, threads: usize) -> Result<(f64, u64)> {
     let mut cfg = TrainConfig::preset(crate::args::AgentKind::EsSac, EnvKind::Walk, preset);
@@ -138,14 +141,20 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             let (tn, _) = es_generation_s(*preset, *threads)?;
             let eff = t1 / (tn * *threads as f64);
             let cfg = TrainConfig::preset(crate::args::AgentKind::EsSac, EnvKind::Walk, *preset);
-            let upd = update_ms(Arch::Lstm, 3)?["ms_per_update"]
+            let arch = if cfg.network.recurrent() {
+                Arch::Lstm
+            } else {
+                Arch::Mlp
+            };
+            let upd = update_ms(arch, 3)?["ms_per_update"]
                 .as_f64()
                 .unwrap_or(f64::NAN);
             let train_s = upd * cfg.inner_cycles as f64 / 1e3;
             let r = json!({
                 "preset": format!("{preset:?}").to_lowercase(),
                 "population": cfg.es.population,
-                "env_steps": steps,
+                "env_steps_per_generation": steps,
+                "env_steps_per_s_1_thread": steps as f64 / t1,
                 "eval_s_1_thread": t1,
                 "eval_s_n_threads": tn,
                 "threads": threads,
@@ -155,7 +164,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                 "train_s_per_generation": train_s,
             });
             let text = format!(
-                "one generation ({} individuals, {steps} env steps): {t1:.2} s on 1 thread, {tn:.2} s on {threads} (efficiency {:.0}%); \
+                "one generation ({} individuals, {steps} env steps, mean of {ES_BENCH_GENERATIONS}): {t1:.3} s on 1 thread, {tn:.3} s on {threads} (efficiency {:.0}%); \
                  {} inner updates ≈ {train_s:.2} s",
                 cfg.es.population, eff * 100.0, cfg.inner_cycles
             );
