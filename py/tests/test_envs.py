@@ -84,7 +84,8 @@ def test_deterministic_for_a_seed(make: type) -> None:
 
 
 def test_walk_reward_terms_and_gait() -> None:
-    env = esrl_rs.WalkEnv()
+    # raw observations, so index 1 is the lateral offset in metres (unscaled)
+    env = esrl_rs.WalkEnv({"normalize_obs": False})
     env.reset(seed=1)
     obs, reward, terminated, truncated, info = env.step(np.zeros(6, dtype=np.float32))
     terms = info["reward_terms"]
@@ -93,7 +94,7 @@ def test_walk_reward_terms_and_gait() -> None:
     assert terms["alive"] == pytest.approx(0.025)
     g = info["gait"]
     assert g["joint_torque"].shape == (6,) and g["torso_position"].shape == (3,)
-    # zero action: zero torque; the logged lateral offset is observation index 1
+    # zero action: zero torque; the logged lateral offset is raw observation index 1
     np.testing.assert_allclose(g["joint_torque"], 0.0, atol=1e-6)
     assert g["lateral_offset"] == pytest.approx(float(obs[1]), abs=1e-6)
     assert g["time"] == pytest.approx(0.025)
