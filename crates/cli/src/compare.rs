@@ -292,6 +292,57 @@ fn train_all(plans: &[Plan], jobs: usize, progress: bool) -> Vec<Result<()>> {
         .collect()
 }
 
+/// What one finished run spent: its length, environment steps and wall time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BudgetRow {
+    /// `<agent>-s<seed>`.
+    pub run: String,
+    /// Generations (ES agents) or episodes (plain agents) in its curve.
+    pub length: usize,
+    /// Whether `length` counts generations.
+    pub generations: bool,
+    /// Environment steps taken, from `summary.json`.
+    pub env_steps: u64,
+    /// Training wall time in seconds, from `summary.json` (summed over resumes).
+    pub wall_s: f64,
+}
+
+fn budget_row(plan: &Plan, length: usize) -> Result<BudgetRow> {
+    let summary = read_summary(&plan.dir)?
+        .with_context(|| format!("{}: no summary.json", plan.dir.display()))?;
+    Ok(BudgetRow {
+        run: plan.name(),
+        length,
+        generations: plan.agent.is_hybrid(),
+        env_steps: env_steps_of(&plan.dir)?,
+        wall_s: summary["wall_s"].as_f64().unwrap_or(f64::NAN),
+    })
+}
+
+/// The per-run budget table: how many generations/episodes, environment steps and seconds
+/// each run of the comparison took, so that unequal budgets are visible next to Table 1.
+pub fn budget_markdown(rows: &[BudgetRow]) -> String {
+    let mut out = String::from(
+        "| Run | Generations / episodes | Env steps | Wall (s) |\n|---|---:|---:|---:|\n",
+    );
+    for r in rows {
+        let unit = if r.generations {
+            "generations"
+        } else {
+            "episodes"
+        };
+        out.push_str(&format!(
+            "| {} | {} {unit} | {} | {:.0} |\n",
+            r.run, r.length, r.env_steps, r.wall_s
+        ));
+    }
+    out.push_str(
+        "\nWall times are as measured on the machine that trained each run, with `--jobs` runs \
+         sharing it; a reused run keeps the time of its own training.\n",
+    );
+    out
+}
+
 /// The `curve` column and the mean of the finite `q0` values of a run's `metrics.jsonl`.
 pub fn read_curve(dir: &Path) -> Result<(Vec<f64>, Option<f64>)> {
     let p = dir.join(RunDir::JSONL);
@@ -472,6 +523,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
 
     // Evaluate every finished run and collect its table entries.
     let mut table_agents = Vec::new();
+    let mut budgets = Vec::new();
     for &agent in &agents {
         let mut curves = Vec::new();
         let mut extras = Vec::new();
@@ -486,6 +538,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             });
             match collected {
                 Ok((curve, q0, report)) => {
+                    budgets.push(budget_row(p, curve.len())?);
                     curves.push(curve);
                     extras.push((q0, report.mean.gait));
                 }
@@ -547,6 +600,8 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         if let Some(note) = &budget_note {
             md.push_str(&format!("\n{note}\n"));
         }
+        md.push_str("\n## Budget per run\n\n");
+        md.push_str(&budget_markdown(&budgets));
         write_atomic(&out.join(TABLE_MD), md.as_bytes())?;
         write_atomic(&out.join(TABLE_CSV), table1_csv(&rows).as_bytes())?;
         print!("{table}");

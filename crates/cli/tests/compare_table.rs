@@ -1,6 +1,7 @@
 //! Contract: `esrl compare --agents es-sac,sac --seeds 2 --preset smoke` trains and evaluates
 //! every agent × seed and writes table.md / table.csv with one row per agent, whose nAUC is
-//! the mean over seeds of the nAUC recomputed here from each run's metrics.jsonl; a second
+//! the mean over seeds of the nAUC recomputed here from each run's metrics.jsonl, and a
+//! budget table with each run's length and environment steps from its summary.json; a second
 //! invocation reuses the finished runs (no file of theirs is rewritten) and writes the same
 //! table; unknown agent names fail with the list of valid ones.
 
@@ -91,6 +92,24 @@ fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
     );
     assert_eq!(rows.iter().filter(|l| l.starts_with("| sac |")).count(), 2);
     assert!(md.contains("Best-Win-50") && md.contains("Episodes-to-Target"));
+    // The budget table: one row per run, with the run's own generations/episodes and steps.
+    assert!(md.contains("## Budget per run"), "{md}");
+    for run in ["es-sac-s0", "es-sac-s1", "sac-s0", "sac-s1"] {
+        let summary: Value = serde_json::from_str(
+            &std::fs::read_to_string(dir.join(run).join("summary.json")).unwrap(),
+        )
+        .unwrap();
+        let unit = if run.starts_with("es-") {
+            "generations"
+        } else {
+            "episodes"
+        };
+        let row = format!(
+            "| {run} | {} {unit} | {} |",
+            summary["length"], summary["env_steps"]
+        );
+        assert!(md.contains(&row), "missing `{row}` in:\n{md}");
+    }
 
     let csv = std::fs::read_to_string(dir.join("table.csv")).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
