@@ -1,7 +1,7 @@
 //! Reproduces the "Physics step" table of the crate docs: for each solver-iteration count,
 //! the torso drift of the 60 s PD-standing test, the worst joint-limit overshoot of the
-//! joint-limit test (with and without actuator armature), and the throughput with random
-//! actions. `cargo run --release -p esrl-sim --example physics_table`
+//! joint-limit test (with and without actuator armature), the creep of a rigid stance, and the
+//! throughput with random actions. `cargo run --release -p esrl-sim --example physics_table`
 
 use std::sync::Arc;
 
@@ -82,15 +82,51 @@ fn limits(config: WalkConfig) -> f64 {
     worst
 }
 
+/// Creep of a rigid stance: every hip and knee pressed into a limit at full effort, ankles at
+/// a constant action, for 60 s (armature 0.5, the `quick` preset's). Such a body is a rigid
+/// object on flat ground, so after the first second (the lurch into the stance) it should not
+/// travel at all. Returns the largest horizontal travel from t = 1 s to the end over the
+/// stances (ankle actions × reset seeds) that stayed up, and how many did.
+fn creep(iterations: u32) -> (f32, usize) {
+    let mut env = WalkEnv::new(config(iterations, 0.5)).unwrap();
+    let (mut worst, mut upright) = (0.0f32, 0);
+    for seed in [1, 2, 3] {
+        for ankle in [-1.0f32, -0.6, -0.3] {
+            env.reset(seed);
+            let action = [1.0, -1.0, ankle, 1.0, -1.0, ankle];
+            let (mut start, mut end, mut fell) = ([0.0f32; 3], [0.0f32; 3], false);
+            for step in 1..=2400 {
+                let s = env.step(&action);
+                if let Some(g) = &s.info.gait {
+                    if step == 40 {
+                        start = g.torso_position;
+                    }
+                    end = g.torso_position;
+                }
+                if s.terminated {
+                    fell = true;
+                    break;
+                }
+            }
+            if !fell {
+                upright += 1;
+                worst = worst.max((end[0] - start[0]).hypot(end[1] - start[1]));
+            }
+        }
+    }
+    (worst, upright)
+}
+
 fn main() {
-    println!("| solver iterations | standing drift | overshoot (armature 0.1) | overshoot (armature 0) | steps/s |");
-    println!("|---|---|---|---|---|");
-    for it in [1, 2, 3, 4, 8] {
+    println!("| solver iterations | standing drift | overshoot (armature 0.1) | overshoot (armature 0) | rigid-stance creep, 59 s | steps/s |");
+    println!("|---|---|---|---|---|---|");
+    for it in [1, 2, 3, 4, 8, 16, 32] {
         let drift =
             standing(config(it, 0.1)).map_or("fell".to_owned(), |d| format!("{:.1} cm", d * 100.0));
         let bench = bench_walk(&config(it, 0.1), 10_000, 0).unwrap();
+        let (travel, upright) = creep(it);
         println!(
-            "| {it} | {drift} | {:.1}° | {:.1}° | {:.0} |",
+            "| {it} | {drift} | {:.1}° | {:.1}° | {travel:.2} m ({upright} of 9 upright) | {:.0} |",
             limits(config(it, 0.1)),
             limits(config(it, 0.0)),
             bench.steps_per_s

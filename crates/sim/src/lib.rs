@@ -47,18 +47,29 @@
 //!
 //! # Physics step
 //!
-//! Defaults ([`PhysicsConfig`]): one Rapier step per 25 ms control period with 4 solver
+//! Defaults ([`PhysicsConfig`]): one Rapier step per 25 ms control period with 16 solver
 //! iterations (in Rapier 0.36 each iteration is an integration substep, so the integrator step
-//! is 6.25 ms), friction 1, and an actuator armature of 0.1 kg·m² on the six torque-controlled
-//! joints. These are the fastest settings that pass every physics test; measured on this
-//! repository's machine (2 shared cores):
+//! is 1.56 ms), friction 1, and an actuator armature of 0.1 kg·m² on the six torque-controlled
+//! joints. Measured on this repository's machine (2 shared cores):
 //!
-//! | solver iterations (× 1 step of 25 ms) | 1 | 2 | 3 | 4 | 8 |
-//! |---|---|---|---|---|---|
-//! | 60 s PD standing, max torso drift (< 5 cm required) | 3.4 cm | 1.4 cm | 1.4 cm | 1.4 cm | 1.4 cm |
-//! | worst joint-limit overshoot, full effort, armature 0.1 (< 6° required) | 68° | 11° | 17° | 4.9° | 3.6° |
-//! | same without armature | 208° | 88° | 60° | 35° | 6.8° |
-//! | control steps/s, random actions, one core (approx.) | 12k | 8k | 6k | 5–7k | 3k |
+//! | solver iterations (× 1 step of 25 ms) | 1 | 2 | 3 | 4 | 8 | 16 | 32 |
+//! |---|---|---|---|---|---|---|---|
+//! | 60 s PD standing, max torso drift (< 5 cm required) | 3.4 cm | 1.4 cm | 1.4 cm | 1.4 cm | 1.4 cm | 1.5 cm | 1.5 cm |
+//! | worst joint-limit overshoot, full effort, armature 0.1 (< 6° required) | 68° | 11° | 17° | 4.9° | 3.6° | 1.1° | 0.4° |
+//! | same without armature | 208° | 88° | 60° | 35° | 6.8° | 1.8° | 0.5° |
+//! | rigid-stance creep over 59 s, armature 0.5, worst of those that stay up (< 2.95 m, i.e. 0.05 m/s, required) | fell | fell | 11.2 m | 9.0 m | 4.1 m | 1.75 m | 0.90 m |
+//! | control steps/s, random actions, one core (approx.) | 20k | 12k | 10k | 8k | 4k | 2.1k | 1.1k |
+//!
+//! The creep row is what decided the default. A stance with both hips and knees pressed into
+//! their limits at full effort and constant ankle torques is a rigid object on flat ground: it
+//! should not travel. With a coarse integrator step the limit-pressed joints chatter (mean
+//! joint speed 0.5 rad/s at 4 iterations, 0.12 at 16, falling in proportion to the step), and
+//! the chattering feet ratchet the body across the floor: 9 m forward and up to 6 m sideways
+//! in a minute at 4 iterations, the former default. Learned policies found this: trained at
+//! 4 iterations, the best ES-SAC policy pressed hips and knees into their limits and "walked"
+//! 9 m in 60 s without a step (`results/README.md`). 16 iterations bring the creep under
+//! 0.03 m/s (3 % of the paper's ES-SAC walking speed of 1.05 m/s; `tests/rigid_stance.rs`
+//! requires < 0.05 m/s) at a quarter of the throughput; 32 halve it again at half that.
 //!
 //! (`cargo run --release -p esrl-sim --example physics_table` reproduces the table; the
 //! throughput varies by ±20 % with the load of the 2 shared cores it was measured on.

@@ -21,7 +21,8 @@ pub struct PhysicsConfig {
     /// Default 1 (fastest stable setting, crate docs "Physics step").
     pub substeps: u32,
     /// Rapier `num_solver_iterations`. In Rapier 0.36 each iteration is also an integration
-    /// substep of `dt / solver_iterations`. Default 4 (crate docs "Physics step").
+    /// substep of `dt / solver_iterations`. Default 16 (crate docs "Physics step": fewer let a
+    /// rigid, limit-pressed stance creep across the floor).
     pub solver_iterations: u32,
     /// Gravitational acceleration, m/s², along −z. Default 9.81 (standard gravity).
     pub gravity: f32,
@@ -41,7 +42,7 @@ impl Default for PhysicsConfig {
     fn default() -> Self {
         Self {
             substeps: 1,
-            solver_iterations: 4,
+            solver_iterations: 16,
             gravity: 9.81,
             friction: 1.0,
             actuator_armature: 0.1,
