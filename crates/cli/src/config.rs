@@ -90,7 +90,8 @@ impl TrainConfig {
                 c.rl.buffer_size = 300_000;
                 c.checkpoint_every = 5;
                 if env == EnvKind::Walk {
-                    // Measured on 2 cores, ES-SAC seed 0, 150 generations (results/README.md).
+                    // Measured on 2 cores, ES-SAC seed 0, 150 generations, with the physics of
+                    // the time (4 solver iterations; results/iterations-4/README.md).
                     // Feed-forward networks take 200 updates per generation in less time than
                     // the LSTMs take 25 and learn far more (best return 79 vs 14–20), given
                     // the O(1) observation (`walk.normalize_obs`; raw, their critic diverges).
