@@ -310,11 +310,14 @@ pub struct BudgetRow {
 fn budget_row(plan: &Plan, length: usize) -> Result<BudgetRow> {
     let summary = read_summary(&plan.dir)?
         .with_context(|| format!("{}: no summary.json", plan.dir.display()))?;
+    let env_steps = summary["env_steps"]
+        .as_u64()
+        .with_context(|| format!("{}: no `env_steps` in summary.json", plan.dir.display()))?;
     Ok(BudgetRow {
         run: plan.name(),
         length,
         generations: plan.agent.is_hybrid(),
-        env_steps: env_steps_of(&plan.dir)?,
+        env_steps,
         wall_s: summary["wall_s"].as_f64().unwrap_or(f64::NAN),
     })
 }

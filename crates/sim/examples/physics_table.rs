@@ -5,7 +5,7 @@
 
 use std::sync::Arc;
 
-use esrl_sim::bench::bench_walk;
+use esrl_sim::bench::{bench_walk, rigid_stance_travel};
 use esrl_sim::{Base, Env, RobotModel, RobotSim, RobotState, SimSetup, WalkConfig, WalkEnv};
 
 fn config(iterations: u32, armature: f32) -> WalkConfig {
@@ -82,35 +82,17 @@ fn limits(config: WalkConfig) -> f64 {
     worst
 }
 
-/// Creep of a rigid stance: every hip and knee pressed into a limit at full effort, ankles at
-/// a constant action, for 60 s (armature 0.5, the `quick` preset's). Such a body is a rigid
-/// object on flat ground, so after the first second (the lurch into the stance) it should not
-/// travel at all. Returns the largest horizontal travel from t = 1 s to the end over the
-/// stances (ankle actions × reset seeds) that stayed up, and how many did.
+/// Creep of a rigid stance ([`rigid_stance_travel`]) with armature 0.5, the `quick`
+/// preset's: the largest travel over the stances (ankle actions × reset seeds) that stayed
+/// up, and how many did.
 fn creep(iterations: u32) -> (f32, usize) {
     let mut env = WalkEnv::new(config(iterations, 0.5)).unwrap();
     let (mut worst, mut upright) = (0.0f32, 0);
     for seed in [1, 2, 3] {
         for ankle in [-1.0f32, -0.6, -0.3] {
-            env.reset(seed);
-            let action = [1.0, -1.0, ankle, 1.0, -1.0, ankle];
-            let (mut start, mut end, mut fell) = ([0.0f32; 3], [0.0f32; 3], false);
-            for step in 1..=2400 {
-                let s = env.step(&action);
-                if let Some(g) = &s.info.gait {
-                    if step == 40 {
-                        start = g.torso_position;
-                    }
-                    end = g.torso_position;
-                }
-                if s.terminated {
-                    fell = true;
-                    break;
-                }
-            }
-            if !fell {
+            if let Some(d) = rigid_stance_travel(&mut env, seed, ankle) {
                 upright += 1;
-                worst = worst.max((end[0] - start[0]).hypot(end[1] - start[1]));
+                worst = worst.max(d);
             }
         }
     }

@@ -1,4 +1,5 @@
-//! Throughput of the walking environment on one core (`esrl bench env`).
+//! Throughput of the walking environment on one core (`esrl bench env`), and the rigid-stance
+//! creep measurement behind the physics default (crate docs, "Physics step").
 
 use std::time::Instant;
 
@@ -86,4 +87,27 @@ pub fn bench_walk(config: &WalkConfig, steps: usize, seed: u64) -> Result<BenchR
         obs_dim: env.obs_dim(),
         act_dim,
     })
+}
+
+/// Horizontal travel (m) of the torso from t = 1 s to t = 60 s of a rigid stance, or None if
+/// it fell: both hips and knees pressed into their limits at full effort (action
+/// `[1, −1, ankle, 1, −1, ankle]`) from a reset with `seed`. Such a body is a rigid object on
+/// flat ground, so it should not travel after the first second's lurch into the stance.
+pub fn rigid_stance_travel(env: &mut WalkEnv, seed: u64, ankle: f32) -> Option<f32> {
+    env.reset(seed);
+    let action = [1.0, -1.0, ankle, 1.0, -1.0, ankle];
+    let (mut start, mut end) = ([0.0f32; 3], [0.0f32; 3]);
+    for step in 1..=2400 {
+        let s = env.step(&action);
+        if let Some(g) = &s.info.gait {
+            if step == 40 {
+                start = g.torso_position;
+            }
+            end = g.torso_position;
+        }
+        if s.terminated {
+            return None;
+        }
+    }
+    Some((end[0] - start[0]).hypot(end[1] - start[1]))
 }

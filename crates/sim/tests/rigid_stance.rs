@@ -6,26 +6,8 @@
 //! A coarser integrator lets the limit-pressed joints chatter and the feet ratchet the body
 //! across the floor (9 m in a minute at 4 solver iterations), which learned policies exploit.
 
-use esrl_sim::{Env, WalkConfig, WalkEnv};
-
-/// Horizontal travel (m) of the torso from t = 1 s to t = 60 s, or None if it fell.
-fn travel(env: &mut WalkEnv, seed: u64, ankle: f32) -> Option<f32> {
-    env.reset(seed);
-    let action = [1.0, -1.0, ankle, 1.0, -1.0, ankle];
-    let (mut start, mut end) = ([0.0f32; 3], [0.0f32; 3]);
-    for step in 1..=2400 {
-        let s = env.step(&action);
-        let g = s.info.gait.expect("WalkEnv reports gait samples");
-        if step == 40 {
-            start = g.torso_position;
-        }
-        end = g.torso_position;
-        if s.terminated {
-            return None;
-        }
-    }
-    Some((end[0] - start[0]).hypot(end[1] - start[1]))
-}
+use esrl_sim::bench::rigid_stance_travel;
+use esrl_sim::{WalkConfig, WalkEnv};
 
 #[test]
 fn a_rigid_stance_does_not_creep() {
@@ -36,7 +18,7 @@ fn a_rigid_stance_does_not_creep() {
         config.physics.actuator_armature = armature;
         let mut env = WalkEnv::new(config).unwrap();
         for (seed, ankle) in [(1, -1.0), (1, -0.6), (2, -1.0), (2, -0.6), (3, -0.3)] {
-            if let Some(d) = travel(&mut env, seed, ankle) {
+            if let Some(d) = rigid_stance_travel(&mut env, seed, ankle) {
                 upright += 1;
                 assert!(
                     d < limit,
