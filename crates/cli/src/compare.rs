@@ -33,11 +33,12 @@
 //! Ctrl-C stops every training at its next generation/episode boundary with a checkpoint; run
 //! the same command again to resume them.
 
-use crate::args::{AgentKind, CompareArgs, Preset};
+use crate::args::{AgentKind, CompareArgs};
 use crate::config::TrainConfig;
 use crate::eval::{self, EvalReport, EVAL_FILE};
 use crate::run_dir::{write_atomic, RunDir};
 use anyhow::{bail, Context, Result};
+use clap::ValueEnum;
 use esrl_metrics::{
     actuator_markdown, summarize_method, table1, table1_csv, table1_markdown, AgentRuns, SeedResult,
 };
@@ -573,11 +574,11 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         let table = table1_markdown(&rows);
         let actuators = actuator_markdown(&rows);
         let has_gait = rows.iter().any(|r| r.gait_runs > 0);
-        let preset = match args.opts.preset {
-            Preset::Paper => "paper",
-            Preset::Quick => "quick",
-            Preset::Smoke => "smoke",
-        };
+        let preset = args
+            .opts
+            .preset
+            .to_possible_value()
+            .map_or_else(String::new, |v| v.get_name().to_owned());
         let mut md = format!(
             "# esrl compare: {} (preset {preset}, seeds 0 to {})\n\n",
             agents

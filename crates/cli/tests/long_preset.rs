@@ -1,0 +1,61 @@
+//! Contract: `--preset long` is exactly the configuration of the documented ES-SAC run that
+//! stays up 60 s (`results/experiments/inner1000-s0`): `quick`, the overlay file
+//! `inner_cycles = 1000`, and 895 generations. Only the recorded preset name differs.
+
+use esrl::args::{AgentKind, EnvKind, Preset, TrainOptions};
+use esrl::config::TrainConfig;
+use std::path::PathBuf;
+
+fn options(preset: Preset, config: Option<PathBuf>, generations: Option<usize>) -> TrainOptions {
+    TrainOptions {
+        preset,
+        config,
+        env: None,
+        urdf: None,
+        threads: Some(1),
+        generations,
+        episodes: None,
+        steps: None,
+        no_progress: true,
+    }
+}
+
+#[test]
+fn long_is_quick_with_the_documented_overlay() {
+    let overlay = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../results/experiments/inner1000-s0/overlay.toml");
+    let documented = TrainConfig::resolve(
+        AgentKind::EsSac,
+        &options(Preset::Quick, Some(overlay), Some(895)),
+        Some(0),
+    )
+    .unwrap();
+    let long = TrainConfig::resolve(
+        AgentKind::EsSac,
+        &options(Preset::Long, None, None),
+        Some(0),
+    )
+    .unwrap();
+    assert_eq!(long.preset, Preset::Long);
+    assert_eq!(long.env, EnvKind::Walk);
+    assert_eq!(long.inner_cycles, 1000);
+    assert_eq!(long.generations, 895);
+    let strip = |c: &TrainConfig| {
+        c.to_toml()
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with("preset ="))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    assert_eq!(strip(&long), strip(&documented));
+    // And it differs from `quick` where it should.
+    let quick = TrainConfig::resolve(
+        AgentKind::EsSac,
+        &options(Preset::Quick, None, None),
+        Some(0),
+    )
+    .unwrap();
+    assert_eq!(quick.inner_cycles, 200);
+    assert_eq!(quick.generations, 150);
+}
