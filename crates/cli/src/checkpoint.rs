@@ -8,6 +8,9 @@
 //!   state.json          counters, random streams, σ, the learning curve so far
 //! ```
 //!
+//! Hybrid runs also keep `RUN/best/` ([`save_best`]): the policy with the highest
+//! learning-curve value so far, for `esrl eval RUN/best`.
+//!
 //! A checkpoint is written to `checkpoint.tmp/`, then swapped in with two renames; a kill at
 //! any moment leaves `checkpoint/` or `checkpoint.old/` complete, and loading falls back to the
 //! latter.
@@ -121,19 +124,71 @@ pub fn save(run: &Path, learner: &Learner, state: &CheckpointState) -> Result<()
     )?;
     trainer.buffer.save(&tmp.join("replay.safetensors"))?;
     crate::run_dir::write_json_atomic(&tmp.join("state.json"), state)?;
-    let current = run.join("checkpoint");
-    let old = run.join("checkpoint.old");
+    swap_in(&tmp, &run.join("checkpoint"), &run.join("checkpoint.old"))
+}
+
+/// Replaces `current` by the complete folder `tmp` with two renames, so that a kill at any
+/// moment leaves `current` or `old` complete.
+fn swap_in(tmp: &Path, current: &Path, old: &Path) -> Result<()> {
     if old.exists() {
-        fs::remove_dir_all(&old).with_context(|| format!("removing {}", old.display()))?;
+        fs::remove_dir_all(old).with_context(|| format!("removing {}", old.display()))?;
     }
     if current.exists() {
-        fs::rename(&current, &old).with_context(|| format!("moving {}", current.display()))?;
+        fs::rename(current, old).with_context(|| format!("moving {}", current.display()))?;
     }
-    fs::rename(&tmp, &current).with_context(|| format!("moving {}", tmp.display()))?;
+    fs::rename(tmp, current).with_context(|| format!("moving {}", tmp.display()))?;
     if old.exists() {
-        fs::remove_dir_all(&old).ok();
+        fs::remove_dir_all(old).ok();
     }
     Ok(())
+}
+
+/// Where a hybrid run's best policy so far is kept (see [`save_best`]).
+pub const BEST: &str = "best";
+
+/// What `RUN/best/best.json` says about the policy in `RUN/best/`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BestInfo {
+    /// The generation (0-based) whose best individual this is.
+    pub generation: usize,
+    /// Its fitness: that generation's learning-curve value, the highest so far.
+    pub fitness: f64,
+    /// Environment steps taken by the end of that generation.
+    pub env_steps: u64,
+}
+
+/// Writes `RUN/best/`: the hybrid run's agent with the actor (and, for ES-SAC, log α) of the
+/// generation's best individual ([`Hybrid::kept`]), i.e. the policy that scored the highest
+/// learning-curve value so far. `esrl eval RUN/best` evaluates it.
+///
+/// Same layout as a checkpoint less the replay buffer and `state.json`, written to
+/// `best.tmp/` and swapped in like one. It is not a point to resume from.
+pub fn save_best(run: &Path, hybrid: &Hybrid, info: &BestInfo) -> Result<()> {
+    let tmp = run.join("best.tmp");
+    if tmp.exists() {
+        fs::remove_dir_all(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
+    }
+    fs::create_dir_all(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+    let mut agent = hybrid.trainer.agent.clone();
+    agent
+        .set_genome(&hybrid.kept)
+        .context("taking the best individual's genome")?;
+    let tensors: Vec<NamedTensor> = agent
+        .state_tensors()
+        .into_iter()
+        .map(|(name, data)| NamedTensor {
+            shape: vec![data.len()],
+            name,
+            data,
+        })
+        .collect();
+    save_tensors(&tmp.join("agent.safetensors"), &tensors, None)?;
+    save_params(
+        &tmp.join("actor.safetensors"),
+        &[("", agent.actor().params())],
+    )?;
+    crate::run_dir::write_json_atomic(&tmp.join("best.json"), info)?;
+    swap_in(&tmp, &run.join(BEST), &run.join("best.old"))
 }
 
 /// Reads `state.json` of a checkpoint folder.

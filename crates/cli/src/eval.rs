@@ -584,8 +584,18 @@ pub fn evaluate_and_write(
     record: Option<&Path>,
 ) -> Result<EvalReport> {
     let report = evaluate(loaded, seed, episodes, record)?;
-    write_json_atomic(&loaded.run.join(EVAL_FILE), &report)?;
+    write_json_atomic(&eval_path(loaded), &report)?;
     Ok(report)
+}
+
+/// Where `esrl eval` writes its report: `RUN/eval.json` for the run's last checkpoint,
+/// `RUN/best/eval.json` for its best policy (so the two never overwrite each other).
+pub fn eval_path(loaded: &LoadedRun) -> PathBuf {
+    if loaded.checkpoint.file_name() == Some(std::ffi::OsStr::new(checkpoint::BEST)) {
+        loaded.checkpoint.join(EVAL_FILE)
+    } else {
+        loaded.run.join(EVAL_FILE)
+    }
 }
 
 /// Runs `esrl eval`.
@@ -600,7 +610,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     } else {
         print!("{}", render_table(&report));
     }
-    eprintln!("wrote {}", loaded.run.join(EVAL_FILE).display());
+    eprintln!("wrote {}", eval_path(&loaded).display());
     if let Some(dir) = &args.record {
         eprintln!(
             "recorded {} episode(s) to {}/episode-NNN.mcap",

@@ -325,14 +325,25 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Re
             break;
         }
         run.append(&row)?;
-        state.rows += 1;
-        state.curve.push(curve);
-        state.q0.push(q0);
-        let best = state
+        let previous_best = state
             .curve
             .iter()
             .copied()
             .fold(f64::NEG_INFINITY, f64::max);
+        if let Learner::Hybrid(h) = &learner {
+            if curve > previous_best {
+                let info = checkpoint::BestInfo {
+                    generation: h.generation - 1,
+                    fitness: curve,
+                    env_steps: h.trainer.env_steps,
+                };
+                checkpoint::save_best(root, h, &info)?;
+            }
+        }
+        state.rows += 1;
+        state.curve.push(curve);
+        state.q0.push(q0);
+        let best = previous_best.max(curve);
         bar.set_position(state.rows as u64);
         bar.set_message(format!("{msg} | best {best:.1}"));
         if !bar.is_hidden() {

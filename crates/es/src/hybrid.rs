@@ -79,6 +79,11 @@ pub struct Hybrid {
     pub inner_cycles: usize,
     /// Generations completed.
     pub generation: usize,
+    /// The genome of the last generation's best individual: the policy whose fitness is that
+    /// generation's learning-curve value (empty before the first generation). The RL actor
+    /// differs from it when the RL actor itself was best, by the inner updates that followed
+    /// its evaluation.
+    pub kept: Vec<f32>,
 }
 
 /// What one individual's evaluation produced.
@@ -97,6 +102,7 @@ impl Hybrid {
             es,
             inner_cycles,
             generation: 0,
+            kept: Vec::new(),
         }
     }
 
@@ -205,6 +211,7 @@ impl Hybrid {
         if replaced {
             self.trainer.agent.set_genome(&genomes[best])?;
         }
+        self.kept.clone_from(&genomes[best]);
         let finite: Vec<f64> = fitness.iter().copied().filter(|f| f.is_finite()).collect();
         let mut env0 = make_env();
         let obs0 = env0.reset(mix_seed(seed, 2, gen * k as u64));
