@@ -94,14 +94,35 @@ pub fn find(run: &Path) -> Option<PathBuf> {
 
 /// Writes a checkpoint of `learner` into `run/checkpoint/` atomically.
 pub fn save(run: &Path, learner: &Learner, state: &CheckpointState) -> Result<()> {
-    let tmp = run.join("checkpoint.tmp");
-    if tmp.exists() {
-        fs::remove_dir_all(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
-    }
-    fs::create_dir_all(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+    let tmp = fresh_dir(&run.join("checkpoint.tmp"))?;
     let trainer = learner.trainer();
-    let mut tensors: Vec<NamedTensor> = trainer
-        .agent
+    let es_mean = match learner {
+        Learner::Hybrid(h) => Some(NamedTensor {
+            name: "es.mean".into(),
+            shape: vec![h.strategy.mean.len()],
+            data: h.strategy.mean.clone(),
+        }),
+        Learner::Plain(_) => None,
+    };
+    write_agent(&tmp, &trainer.agent, es_mean)?;
+    trainer.buffer.save(&tmp.join("replay.safetensors"))?;
+    crate::run_dir::write_json_atomic(&tmp.join("state.json"), state)?;
+    swap_in(&tmp, &run.join("checkpoint"), &run.join("checkpoint.old"))
+}
+
+/// Creates `dir` empty, removing what a killed write left there.
+fn fresh_dir(dir: &Path) -> Result<PathBuf> {
+    if dir.exists() {
+        fs::remove_dir_all(dir).with_context(|| format!("removing {}", dir.display()))?;
+    }
+    fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    Ok(dir.to_path_buf())
+}
+
+/// Writes `agent.safetensors` (the agent's state tensors, plus `extra`) and
+/// `actor.safetensors` (the actor alone) into `dir`.
+fn write_agent(dir: &Path, agent: &Agent, extra: Option<NamedTensor>) -> Result<()> {
+    let tensors: Vec<NamedTensor> = agent
         .state_tensors()
         .into_iter()
         .map(|(name, data)| NamedTensor {
@@ -109,22 +130,14 @@ pub fn save(run: &Path, learner: &Learner, state: &CheckpointState) -> Result<()
             name,
             data,
         })
+        .chain(extra)
         .collect();
-    if let Learner::Hybrid(h) = learner {
-        tensors.push(NamedTensor {
-            name: "es.mean".into(),
-            shape: vec![h.strategy.mean.len()],
-            data: h.strategy.mean.clone(),
-        });
-    }
-    save_tensors(&tmp.join("agent.safetensors"), &tensors, None)?;
+    save_tensors(&dir.join("agent.safetensors"), &tensors, None)?;
     save_params(
-        &tmp.join("actor.safetensors"),
-        &[("", trainer.agent.actor().params())],
+        &dir.join("actor.safetensors"),
+        &[("", agent.actor().params())],
     )?;
-    trainer.buffer.save(&tmp.join("replay.safetensors"))?;
-    crate::run_dir::write_json_atomic(&tmp.join("state.json"), state)?;
-    swap_in(&tmp, &run.join("checkpoint"), &run.join("checkpoint.old"))
+    Ok(())
 }
 
 /// Replaces `current` by the complete folder `tmp` with two renames, so that a kill at any
@@ -164,29 +177,12 @@ pub struct BestInfo {
 /// Same layout as a checkpoint less the replay buffer and `state.json`, written to
 /// `best.tmp/` and swapped in like one. It is not a point to resume from.
 pub fn save_best(run: &Path, hybrid: &Hybrid, info: &BestInfo) -> Result<()> {
-    let tmp = run.join("best.tmp");
-    if tmp.exists() {
-        fs::remove_dir_all(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
-    }
-    fs::create_dir_all(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+    let tmp = fresh_dir(&run.join("best.tmp"))?;
     let mut agent = hybrid.trainer.agent.clone();
     agent
         .set_genome(&hybrid.kept)
         .context("taking the best individual's genome")?;
-    let tensors: Vec<NamedTensor> = agent
-        .state_tensors()
-        .into_iter()
-        .map(|(name, data)| NamedTensor {
-            shape: vec![data.len()],
-            name,
-            data,
-        })
-        .collect();
-    save_tensors(&tmp.join("agent.safetensors"), &tensors, None)?;
-    save_params(
-        &tmp.join("actor.safetensors"),
-        &[("", agent.actor().params())],
-    )?;
+    write_agent(&tmp, &agent, None)?;
     crate::run_dir::write_json_atomic(&tmp.join("best.json"), info)?;
     swap_in(&tmp, &run.join(BEST), &run.join("best.old"))
 }
