@@ -50,6 +50,13 @@ pub struct CheckpointState {
     pub sigma: Option<f64>,
     /// ES generation counter (hybrid).
     pub es_generation: Option<u64>,
+    /// Whether the RL actor carries inner updates not yet evaluated (hybrid). Absent in
+    /// checkpoints written before this field existed: then true after generation 0.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rl_trained: Option<bool>,
+    /// The hybrid loop's counts so far (hybrid; absent in older checkpoints).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loop_stats: Option<esrl_es::LoopStats>,
     /// Wall-clock seconds of training so far.
     pub wall_s: f64,
     /// The learning curve so far.
@@ -258,6 +265,10 @@ pub fn restore(dir: &Path, learner: &mut Learner, state: &CheckpointState) -> Re
         h.strategy.sigma = state.sigma.unwrap_or(h.strategy.sigma);
         h.strategy.generation = state.es_generation.unwrap_or(0);
         h.generation = state.generations;
+        h.rl_trained = state
+            .rl_trained
+            .unwrap_or(h.generation > 0 && h.inner_cycles > 0);
+        h.stats = state.loop_stats.clone().unwrap_or_default();
     }
     Ok(())
 }

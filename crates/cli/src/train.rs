@@ -134,6 +134,16 @@ pub struct Summary {
     pub wall_s: f64,
     /// Whether the configured budget was completed.
     pub finished: bool,
+    /// ES-X: share of the generations whose individual 0 was a trained actor in which that
+    /// actor was the best individual.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rl_trained_best_share: Option<f64>,
+    /// ES-X: the same share for being an elite.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rl_trained_elite_share: Option<f64>,
+    /// ES-X: share of the generations in which the RL actor was replaced.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rl_replaced_share: Option<f64>,
 }
 
 /// Where a run goes by default.
@@ -202,6 +212,8 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Re
         episode_open: false,
         sigma: None,
         es_generation: None,
+        rl_trained: None,
+        loop_stats: None,
         wall_s: 0.0,
         curve: Vec::new(),
         q0: Vec::new(),
@@ -434,6 +446,8 @@ fn save_checkpoint(
         state.generations = h.generation;
         state.sigma = Some(h.strategy.sigma);
         state.es_generation = Some(h.strategy.generation);
+        state.rl_trained = Some(h.rl_trained);
+        state.loop_stats = Some(h.stats.clone());
     }
     checkpoint::save(root, learner, state)
 }
@@ -450,7 +464,14 @@ fn write_summary(
         return Ok(());
     }
     let curve = CurveSummary::from_curve(&state.curve, None)?;
+    let stats = match learner {
+        Learner::Hybrid(h) => Some(&h.stats),
+        Learner::Plain(_) => None,
+    };
     let summary = Summary {
+        rl_trained_best_share: stats.and_then(|s| s.trained_best_share()),
+        rl_trained_elite_share: stats.and_then(|s| s.trained_elite_share()),
+        rl_replaced_share: stats.and_then(|s| s.replaced_share()),
         agent: cfg.agent.name().into(),
         env: cfg.env,
         seed: cfg.seed,

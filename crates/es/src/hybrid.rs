@@ -1,27 +1,40 @@
-//! The hybrid ES-X loop of the paper's §4 (Fig. 3), X ∈ {SAC, TD3, DDPG}.
+//! The hybrid ES-X loop of the paper's §4–5 (Fig. 3), X ∈ {SAC, TD3, DDPG}.
 //!
-//! One generation:
+//! One generation ([`Hybrid::step`]):
 //! 1. the population: the RL agent's current actor (individual 0) and N − 1 perturbations
 //!    θ + σεᵢ of the ES mean (eq. 8);
 //! 2. every individual runs K episodes, in parallel on a rayon pool; all individuals of a
 //!    generation see the same K initial states (common random numbers, so fitness differences
-//!    come from the policies); fitness is the mean return (eq. 9);
-//! 3. every transition goes into the shared replay buffer, in individual order;
-//! 4. the elites update θ and σ (eqs. 10, 11);
-//! 5. the RL agent runs its inner training cycles (one minibatch update each) on the buffer;
-//! 6. elitist replacement: if the best individual's fitness beats the RL actor's, the RL actor
-//!    takes its parameters (for ES-SAC, log α too).
+//!    come from the policies); fitness is the mean return (eq. 9); every transition goes into
+//!    the shared replay buffer, in individual order;
+//! 3. the elites update θ and σ (eqs. 10, 11);
+//! 4. elitist replacement: if the best individual's fitness beats the RL actor's, the RL actor
+//!    takes its parameters (for ES-SAC, log α too);
+//! 5. the RL agent runs its inner training cycles (one minibatch update each) on the buffer,
+//!    refining the actor step 4 left, which is individual 0 of the next generation.
 //!
-//! ES-SAC individuals act by sampling their Gaussian policy (its std head and α are part of the
-//! genome, and the buffer needs exploratory data); ES-TD3/ES-DDPG individuals act
-//! deterministically, the parameter noise being their exploration, as in CEM-RL.
+//! Steps 4 and 5 in this order are the paper's (§5: the agent "runs for 50 inner training
+//! cycles to consolidate these improvements ... yielding a refined policy for the next
+//! generation"), CEM-RL's and ERL's: the gradient work is always evaluated before anything can
+//! replace it. `es.order = "train-then-replace"` ([`LoopOrder`]) runs 5 before 4, which
+//! discards the updates whenever another individual beat the untrained actor; it is kept to
+//! measure that difference.
+//!
+//! How individuals act while scored is `es.fitness` ([`Fitness`]): by default ES-SAC
+//! individuals sample their Gaussian policy (its std head and α are part of the genome, and
+//! the buffer needs exploratory data) and ES-TD3/ES-DDPG individuals act deterministically,
+//! the parameter noise being their exploration, as in CEM-RL.
+//!
+//! The learning curve is the best fitness of each generation (the fitness of the policy kept
+//! at step 4); [`Hybrid::kept`] is that policy's genome, for `RUN/best/`.
 //!
 //! Results do not depend on the thread count: every individual's rollouts use random streams
 //! keyed by (seed, generation, individual), and results are gathered in individual order.
 
-use crate::strategy::{rank, EsConfig, Strategy};
+use crate::strategy::{rank, EsConfig, Fitness, LoopOrder, Strategy};
 use esrl_agents::rollout::{rollout, Actor as Acting};
-use esrl_agents::{mix_seed, ActMode, Agent, AgentError, Algo, Episode, Trainer};
+use esrl_agents::train::LossMeans;
+use esrl_agents::{mix_seed, ActMode, Agent, AgentError, Algo, Episode, Policy, Trainer};
 use esrl_sim::Env;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -35,8 +48,8 @@ pub struct GenerationReport {
     pub generation: usize,
     /// Environment steps so far (warm start and this generation included).
     pub env_steps: u64,
-    /// The learning-curve value: the fitness of the policy kept after elitist replacement
-    /// (the best fitness of the generation).
+    /// The learning-curve value: the fitness of the policy kept at elitist replacement (the
+    /// best fitness of the generation).
     pub curve: f64,
     /// Best fitness in the population.
     pub best_fitness: f64,
@@ -46,7 +59,11 @@ pub struct GenerationReport {
     pub worst_fitness: f64,
     /// The RL actor's fitness (individual 0).
     pub rl_fitness: f64,
-    /// The RL actor's rank in the population (0 = best).
+    /// Whether individual 0 carried inner-training updates made since its genome was last
+    /// evaluated (false in generation 0, with `inner_cycles = 0`, and, under
+    /// `train-then-replace`, after a generation that replaced the RL actor).
+    pub rl_trained: bool,
+    /// The RL actor's rank in the population (0 = best; ties go to the lower index).
     pub rl_rank: usize,
     /// Whether the RL actor was among the elites.
     pub rl_elite: bool,
@@ -60,10 +77,55 @@ pub struct GenerationReport {
     pub critic_loss: Option<f64>,
     /// Mean actor loss over the inner cycles.
     pub actor_loss: Option<f64>,
-    /// Q₀ of the kept policy at the generation's first initial state.
+    /// Q₀ of the RL actor after the generation (individual 0 of the next one) at this
+    /// generation's first initial state.
     pub q0: f64,
-    /// Mean episode length in the population.
+    /// Mean episode length over the generation's rollouts.
     pub mean_length: f64,
+}
+
+/// Counts over a run's generations that show whether the gradient work pays: how often the
+/// trained actor, once evaluated, was the best individual or an elite.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct LoopStats {
+    /// Generations run.
+    pub generations: usize,
+    /// Generations whose individual 0 was a trained actor ([`GenerationReport::rl_trained`]).
+    pub trained: usize,
+    /// Of those, the generations where it was the best individual.
+    pub trained_best: usize,
+    /// Of those, the generations where it was an elite.
+    pub trained_elite: usize,
+    /// Generations where the RL actor was replaced.
+    pub replaced: usize,
+}
+
+impl LoopStats {
+    /// Counts one generation's row in.
+    pub fn add(&mut self, r: &GenerationReport) {
+        self.generations += 1;
+        self.replaced += usize::from(r.rl_replaced);
+        if r.rl_trained {
+            self.trained += 1;
+            self.trained_best += usize::from(r.rl_rank == 0);
+            self.trained_elite += usize::from(r.rl_elite);
+        }
+    }
+
+    /// Share of trained generations in which the trained actor was best (None before any).
+    pub fn trained_best_share(&self) -> Option<f64> {
+        (self.trained > 0).then(|| self.trained_best as f64 / self.trained as f64)
+    }
+
+    /// Share of trained generations in which the trained actor was an elite.
+    pub fn trained_elite_share(&self) -> Option<f64> {
+        (self.trained > 0).then(|| self.trained_elite as f64 / self.trained as f64)
+    }
+
+    /// Share of generations in which the RL actor was replaced.
+    pub fn replaced_share(&self) -> Option<f64> {
+        (self.generations > 0).then(|| self.replaced as f64 / self.generations as f64)
+    }
 }
 
 /// The hybrid trainer: an RL trainer (agent + buffer) and the ES distribution.
@@ -81,14 +143,20 @@ pub struct Hybrid {
     pub generation: usize,
     /// The genome of the last generation's best individual: the policy whose fitness is that
     /// generation's learning-curve value (empty before the first generation). The RL actor
-    /// differs from it when the RL actor itself was best, by the inner updates that followed
-    /// its evaluation.
+    /// differs from it by the inner updates that followed replacement.
     pub kept: Vec<f32>,
+    /// Whether the RL actor carries inner-training updates not yet evaluated (it will be
+    /// individual 0 of the next generation).
+    pub rl_trained: bool,
+    /// Counts over the generations run so far.
+    pub stats: LoopStats,
 }
 
 /// What one individual's evaluation produced.
 struct Evaluated {
+    /// Mean return of the scored rollouts (eq. 9).
     fitness: f64,
+    /// Every rollout, in the order they go into the buffer.
     episodes: Vec<Episode>,
 }
 
@@ -103,6 +171,8 @@ impl Hybrid {
             inner_cycles,
             generation: 0,
             kept: Vec::new(),
+            rl_trained: false,
+            stats: LoopStats::default(),
         }
     }
 
@@ -139,6 +209,83 @@ impl Hybrid {
         genomes
     }
 
+    /// The rollouts of one evaluation: `(mode, scored)` pairs, run in this order from the same
+    /// initial state.
+    fn rollout_plan(&self) -> &'static [(ActMode, bool)] {
+        const EXPLORE: &[(ActMode, bool)] = &[(ActMode::Explore, true)];
+        const DETERMINISTIC: &[(ActMode, bool)] = &[(ActMode::Deterministic, true)];
+        const BOTH: &[(ActMode, bool)] =
+            &[(ActMode::Explore, false), (ActMode::Deterministic, true)];
+        match self.es.fitness {
+            Fitness::Auto if self.trainer.agent.algo() == Algo::Sac => EXPLORE,
+            Fitness::Auto | Fitness::Deterministic => DETERMINISTIC,
+            Fitness::Sampled => EXPLORE,
+            Fitness::Both => BOTH,
+        }
+    }
+
+    /// Evaluates `genomes` on the pool (step 2), each on the generation's K initial states.
+    fn evaluate(
+        &self,
+        genomes: &[Vec<f32>],
+        make_env: &(dyn Fn() -> Box<dyn Env> + Sync),
+        pool: &rayon::ThreadPool,
+    ) -> Result<Vec<Evaluated>, AgentError> {
+        let agent = &self.trainer.agent;
+        let gen = self.generation as u64;
+        let seed = self.trainer.seed;
+        let k = self.es.evaluations;
+        let plan = self.rollout_plan();
+        let scored_per_eval = plan.iter().filter(|(_, scored)| *scored).count();
+        let evaluate_one = |i: usize, genome: &Vec<f32>| -> Result<Evaluated, AgentError> {
+            let mut env = make_env();
+            let mut policy: Policy = agent.policy_from_genome(genome)?;
+            let mut rng = ChaCha8Rng::seed_from_u64(mix_seed(seed, 4 + gen, i as u64));
+            let mut episodes = Vec::with_capacity(k * plan.len());
+            let mut score = 0.0;
+            for e in 0..k {
+                let env_seed = mix_seed(seed, 2, gen * k as u64 + e as u64);
+                for &(mode, scored) in plan {
+                    let ep = rollout(
+                        env.as_mut(),
+                        Acting::Policy(&mut policy, mode),
+                        env_seed,
+                        None,
+                        &mut rng,
+                        |_| {},
+                    );
+                    if scored {
+                        score += ep.ret;
+                    }
+                    episodes.push(ep);
+                }
+            }
+            Ok(Evaluated {
+                fitness: score / (k * scored_per_eval) as f64,
+                episodes,
+            })
+        };
+        let evaluated: Vec<Result<Evaluated, AgentError>> = pool.install(|| {
+            genomes
+                .par_iter()
+                .enumerate()
+                .map(|(i, g)| evaluate_one(i, g))
+                .collect()
+        });
+        evaluated.into_iter().collect()
+    }
+
+    /// The inner training cycles (step 5), once the warm start is in the buffer.
+    fn train(&mut self) -> Result<LossMeans, AgentError> {
+        let mut losses = LossMeans::default();
+        if self.trainer.env_steps >= self.trainer.agent.config().warm_start as u64 {
+            for _ in 0..self.inner_cycles {
+                losses.add(&self.trainer.update()?);
+            }
+        }
+        Ok(losses)
+    }
+
     /// Runs one generation. `make_env` builds an environment per individual (called from pool
     /// threads); `pool` runs the rollouts.
     pub fn step(
@@ -148,73 +295,56 @@ impl Hybrid {
     ) -> Result<GenerationReport, AgentError> {
         let n = self.es.population;
         let genomes = self.population();
-        let agent = &self.trainer.agent;
+        let rl_trained = self.rl_trained;
 
-        let gen = self.generation as u64;
-        let seed = self.trainer.seed;
-        let k = self.es.evaluations;
-        let mode = if agent.algo() == Algo::Sac {
-            ActMode::Explore
-        } else {
-            ActMode::Deterministic
-        };
-        let evaluated: Vec<Result<Evaluated, AgentError>> = pool.install(|| {
-            genomes
-                .par_iter()
-                .enumerate()
-                .map(|(i, genome)| {
-                    let mut env = make_env();
-                    let mut policy = agent.policy_from_genome(genome)?;
-                    let mut rng = ChaCha8Rng::seed_from_u64(mix_seed(seed, 4 + gen, i as u64));
-                    let episodes: Vec<Episode> = (0..k)
-                        .map(|e| {
-                            let env_seed = mix_seed(seed, 2, gen * k as u64 + e as u64);
-                            rollout(
-                                env.as_mut(),
-                                Acting::Policy(&mut policy, mode),
-                                env_seed,
-                                None,
-                                &mut rng,
-                                |_| {},
-                            )
-                        })
-                        .collect();
-                    let fitness = episodes.iter().map(|e| e.ret).sum::<f64>() / k as f64;
-                    Ok(Evaluated { fitness, episodes })
-                })
-                .collect()
-        });
-        let evaluated = evaluated.into_iter().collect::<Result<Vec<_>, _>>()?;
-
-        let mut lengths = 0usize;
+        // 2. Evaluate; every transition into the buffer, in individual order.
+        let evaluated = self.evaluate(&genomes, make_env, pool)?;
+        let mut steps = 0usize;
+        let mut rollouts = 0usize;
         for ev in &evaluated {
             for ep in &ev.episodes {
                 ep.push_into(&mut self.trainer.buffer);
-                self.trainer.env_steps += ep.len() as u64;
-                lengths += ep.len();
+                steps += ep.len();
+                rollouts += 1;
             }
         }
+        self.trainer.env_steps += steps as u64;
+
+        // 3. The ES update.
         let fitness: Vec<f64> = evaluated.iter().map(|e| e.fitness).collect();
         let refs: Vec<&[f32]> = genomes.iter().map(Vec::as_slice).collect();
         let order = self.strategy.update(&refs, &fitness, &self.es);
-
-        let mut losses = esrl_agents::train::LossMeans::default();
-        if self.trainer.env_steps >= self.trainer.agent.config().warm_start as u64 {
-            for _ in 0..self.inner_cycles {
-                losses.add(&self.trainer.update()?);
-            }
-        }
-
         let best = order[0];
-        let rl_rank = order.iter().position(|&i| i == 0).unwrap_or(n);
         let replaced = best != 0 && fitness[best] > fitness[0];
-        if replaced {
-            self.trainer.agent.set_genome(&genomes[best])?;
-        }
+
+        // 4 and 5: replacement and the inner cycles, in the configured order.
+        let losses = match self.es.order {
+            LoopOrder::ReplaceThenTrain => {
+                if replaced {
+                    self.trainer.agent.set_genome(&genomes[best])?;
+                }
+                self.train()?
+            }
+            LoopOrder::TrainThenReplace => {
+                let losses = self.train()?;
+                if replaced {
+                    self.trainer.agent.set_genome(&genomes[best])?;
+                }
+                losses
+            }
+        };
+        let trained_now = losses.critic().is_some();
+        self.rl_trained = match self.es.order {
+            LoopOrder::ReplaceThenTrain => trained_now,
+            LoopOrder::TrainThenReplace => trained_now && !replaced,
+        };
         self.kept.clone_from(&genomes[best]);
+
+        let rl_rank = order.iter().position(|&i| i == 0).unwrap_or(n);
         let finite: Vec<f64> = fitness.iter().copied().filter(|f| f.is_finite()).collect();
         let mut env0 = make_env();
-        let obs0 = env0.reset(mix_seed(seed, 2, gen * k as u64));
+        let k = self.es.evaluations as u64;
+        let obs0 = env0.reset(mix_seed(self.trainer.seed, 2, self.generation as u64 * k));
         let report = GenerationReport {
             generation: self.generation,
             env_steps: self.trainer.env_steps,
@@ -223,6 +353,7 @@ impl Hybrid {
             mean_fitness: finite.iter().sum::<f64>() / finite.len().max(1) as f64,
             worst_fitness: finite.iter().copied().fold(f64::INFINITY, f64::min),
             rl_fitness: fitness[0],
+            rl_trained,
             rl_rank,
             rl_elite: rl_rank < self.es.elites(),
             rl_replaced: replaced,
@@ -231,8 +362,9 @@ impl Hybrid {
             critic_loss: losses.critic(),
             actor_loss: losses.actor(),
             q0: self.trainer.agent.q0(&obs0),
-            mean_length: lengths as f64 / (n * k) as f64,
+            mean_length: steps as f64 / rollouts.max(1) as f64,
         };
+        self.stats.add(&report);
         self.generation += 1;
         Ok(report)
     }
@@ -293,12 +425,13 @@ mod tests {
                     replaced += 1;
                     let best = population
                         .iter()
-                        .position(|g| *g == h.trainer.agent.genome())
-                        .expect("the replaced actor carries a population member's genome");
+                        .position(|g| *g == h.kept)
+                        .expect("the kept genome is a population member's");
                     assert_ne!(best, 0);
                 } else {
                     kept += 1;
                     assert_eq!(r.rl_rank, 0, "not replaced means the RL actor was best");
+                    assert_eq!(h.kept, population[0]);
                 }
                 assert_eq!(r.curve, r.best_fitness);
             }

@@ -7,5 +7,5 @@
 pub mod hybrid;
 pub mod strategy;
 
-pub use hybrid::{GenerationReport, Hybrid};
-pub use strategy::{elite_weights, rank, ConfigError, EsConfig, Strategy};
+pub use hybrid::{GenerationReport, Hybrid, LoopStats};
+pub use strategy::{elite_weights, rank, ConfigError, EsConfig, Fitness, LoopOrder, Strategy};

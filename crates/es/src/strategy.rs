@@ -35,6 +35,50 @@ pub struct EsConfig {
     pub sigma_decay: f64,
     /// Rollouts per individual K in eq. 9. Default 1 (MATLAB's `EvaluationsPerIndividual`).
     pub evaluations: usize,
+    /// How individuals act in the rollouts that score them. Default `auto` (ES-SAC samples,
+    /// ES-TD3/ES-DDPG act deterministically), see [`Fitness`].
+    pub fitness: Fitness,
+    /// Order of replacement and inner training within a generation. Default
+    /// `replace-then-train` (paper §5, SPEC §5), see [`LoopOrder`].
+    pub order: LoopOrder,
+}
+
+/// How the individuals of a generation act in the rollouts that score them (`es.fitness`).
+///
+/// Every rollout an individual runs, scored or not, goes into the replay buffer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Fitness {
+    /// ES-SAC individuals sample their Gaussian policy (the paper: the genome includes the
+    /// std head and α, and the buffer needs exploratory data); ES-TD3/ES-DDPG individuals act
+    /// by tanh μ, their parameter noise being the exploration (as in CEM-RL).
+    #[default]
+    Auto,
+    /// Every individual acts with its algorithm's exploration (SAC: a Gaussian sample;
+    /// TD3/DDPG: tanh μ plus the exploration noise) and is scored on that rollout.
+    Sampled,
+    /// Every individual acts by tanh μ and is scored on that rollout: the fitness measures
+    /// the policy that `esrl eval` would run, without the luck of the action noise.
+    Deterministic,
+    /// Each of the K evaluations is two rollouts from the same initial state: one with the
+    /// algorithm's exploration (data for the buffer) and one by tanh μ (the score, its data
+    /// kept too). Twice the environment steps.
+    Both,
+}
+
+/// The order of elitist replacement and inner training in one generation (`es.order`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum LoopOrder {
+    /// Replacement first, then the inner cycles refine the kept actor, which is individual 0
+    /// of the next generation (paper §5; CEM-RL and ERL likewise evaluate the gradient-trained
+    /// actor before anything can replace it).
+    #[default]
+    ReplaceThenTrain,
+    /// The inner cycles train the RL actor first, then replacement (decided on fitnesses
+    /// measured before that training) may overwrite it, discarding the updates unevaluated.
+    /// The loop of esrl up to 2026-11; kept to reproduce and measure the difference.
+    TrainThenReplace,
 }
 
 impl Default for EsConfig {
@@ -46,6 +90,8 @@ impl Default for EsConfig {
             sigma_min: 0.01,
             sigma_decay: 0.01,
             evaluations: 1,
+            fitness: Fitness::Auto,
+            order: LoopOrder::ReplaceThenTrain,
         }
     }
 }
@@ -226,7 +272,7 @@ mod tests {
             sigma: 1.0,
             sigma_min: 0.1,
             sigma_decay: 0.5,
-            evaluations: 1,
+            ..EsConfig::default()
         };
         let mut s = Strategy::new(vec![0.0, 0.0], 1.0, 1);
         let a = [1.0f32, 2.0];
