@@ -176,3 +176,19 @@ def test_threads_give_the_sequential_results() -> None:
     with ThreadPoolExecutor(4) as pool:
         results = list(pool.map(lambda _: env.step(np.zeros(6, dtype=np.float32)), range(40)))
     assert len(results) == 40
+
+
+def test_make_right_after_import() -> None:
+    # A fresh interpreter: nothing but `import esrl_rs` before gym.make.
+    import subprocess
+    import sys
+
+    code = (
+        "import gymnasium as gym, esrl_rs\n"
+        "env = gym.make('esrl/Walk-v0', config={'episode_seconds': 1.0})\n"
+        "obs, _ = env.reset(seed=0)\n"
+        "print(obs.shape)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "(43,)"

@@ -171,6 +171,12 @@ impl RlConfig {
             "must be ≥ 1",
         )?;
         check(
+            self.batch_size <= self.buffer_size,
+            "batch_size",
+            self.batch_size as f64,
+            "must be ≤ buffer_size (a batch is drawn from the buffer)",
+        )?;
+        check(
             self.seq_len > 0,
             "seq_len",
             self.seq_len as f64,

@@ -95,6 +95,9 @@ pub struct ReplayBuffer {
     next_episode: u64,
     /// Whether the last pushed transition ended its episode.
     episode_open: bool,
+    /// Transitions pushed since creation (the incremental checkpoints count from it).
+    #[serde(default)]
+    pushed: u64,
     obs: Vec<f32>,
     action: Vec<f32>,
     reward: Vec<f32>,
@@ -115,6 +118,7 @@ impl ReplayBuffer {
             head: 0,
             next_episode: 0,
             episode_open: false,
+            pushed: 0,
             obs: vec![0.0; capacity * obs_dim],
             action: vec![0.0; capacity * act_dim],
             reward: vec![0.0; capacity],
@@ -187,6 +191,7 @@ impl ReplayBuffer {
         self.episode_open = true;
         self.head = (self.head + 1) % self.capacity;
         self.len = (self.len + 1).min(self.capacity);
+        self.pushed += 1;
     }
 
     /// Slot of the oldest stored transition.
@@ -276,10 +281,32 @@ impl ReplayBuffer {
         self.sample_sequences(rng, batch, 1, 0)
     }
 
+    /// Transitions pushed since the buffer was created (stored or since overwritten).
+    pub fn pushed(&self) -> u64 {
+        self.pushed
+    }
+
     /// Saves the stored transitions, oldest first, as F32 safetensors (episode structure is
     /// kept through each slot's step index; only the filled part is written).
     pub fn save(&self, path: &Path) -> Result<(), NnError> {
-        let order: Vec<usize> = (0..self.len)
+        self.save_last(path, self.len)
+    }
+
+    /// Saves, in the format of [`ReplayBuffer::save`], the transitions pushed since the
+    /// buffer had seen `since` pushes and still stored (the newest `pushed − since`, at most
+    /// the whole buffer): one chunk of an incremental checkpoint. Returns how many it wrote.
+    pub fn save_since(&self, path: &Path, since: u64) -> Result<usize, NnError> {
+        let n = usize::try_from(self.pushed.saturating_sub(since))
+            .unwrap_or(usize::MAX)
+            .min(self.len);
+        self.save_last(path, n)?;
+        Ok(n)
+    }
+
+    /// Saves the newest `n` stored transitions, oldest first.
+    fn save_last(&self, path: &Path, n: usize) -> Result<(), NnError> {
+        let skip = self.len - n;
+        let order: Vec<usize> = (skip..self.len)
             .map(|k| (self.oldest() + k) % self.capacity)
             .collect();
         let gather = |src: &[f32], w: usize| -> Vec<f32> {
@@ -288,7 +315,6 @@ impl ReplayBuffer {
                 .flat_map(|&i| src[i * w..(i + 1) * w].iter().copied())
                 .collect()
         };
-        let n = self.len;
         let tensors = vec![
             NamedTensor {
                 name: "obs".into(),
@@ -339,65 +365,94 @@ impl ReplayBuffer {
         capacity: usize,
         episode_open: bool,
     ) -> Result<Self, NnError> {
-        let file = load_tensors(path)?;
-        let get = |name: &str, width: usize| -> Result<&[f32], NnError> {
-            let t = file.get(name).ok_or_else(|| NnError::MissingTensor {
+        let chunk = Chunk::read(path, obs_dim, act_dim)?;
+        if chunk.len() > capacity {
+            return Err(NnError::ShapeMismatch {
                 path: path.to_path_buf(),
-                name: name.into(),
-            })?;
-            let rows = t.shape.first().copied().unwrap_or(0);
-            if t.data.len() != rows * width || rows > capacity {
-                return Err(NnError::ShapeMismatch {
-                    path: path.to_path_buf(),
-                    name: name.into(),
-                    expected: vec![rows.min(capacity), width],
-                    found: t.shape.clone(),
-                });
-            }
-            Ok(&t.data)
-        };
-        let obs = get("obs", obs_dim)?;
-        let n = obs.len() / obs_dim.max(1);
-        let action = get("action", act_dim)?;
-        let reward = get("reward", 1)?;
-        let next_obs = get("next_obs", obs_dim)?;
-        let terminated = get("terminated", 1)?;
-        let step = get("step", 1)?;
-        for (name, len) in [
-            ("action", action.len() / act_dim.max(1)),
-            ("reward", reward.len()),
-            ("next_obs", next_obs.len() / obs_dim.max(1)),
-            ("terminated", terminated.len()),
-            ("step", step.len()),
-        ] {
-            if len != n {
-                return Err(NnError::ShapeMismatch {
-                    path: path.to_path_buf(),
-                    name: name.into(),
-                    expected: vec![n],
-                    found: vec![len],
-                });
-            }
+                name: "obs".into(),
+                expected: vec![capacity, obs_dim],
+                found: vec![chunk.len(), obs_dim],
+            });
         }
+        let pushed = chunk.len() as u64;
+        Ok(Self::from_chunks(
+            vec![chunk],
+            obs_dim,
+            act_dim,
+            capacity,
+            episode_open,
+            pushed,
+        ))
+    }
+
+    /// Loads a buffer from the chunks of an incremental checkpoint
+    /// ([`ReplayBuffer::save_since`]), oldest first, keeping the newest `capacity`
+    /// transitions; `pushed` is the buffer's push count when the last chunk was written.
+    /// Sampling from the loaded buffer draws exactly what the saved one would have drawn.
+    pub fn load_chunks(
+        paths: &[&Path],
+        obs_dim: usize,
+        act_dim: usize,
+        capacity: usize,
+        episode_open: bool,
+        pushed: u64,
+    ) -> Result<Self, NnError> {
+        let chunks = paths
+            .iter()
+            .map(|p| Chunk::read(p, obs_dim, act_dim))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self::from_chunks(
+            chunks,
+            obs_dim,
+            act_dim,
+            capacity,
+            episode_open,
+            pushed,
+        ))
+    }
+
+    fn from_chunks(
+        chunks: Vec<Chunk>,
+        obs_dim: usize,
+        act_dim: usize,
+        capacity: usize,
+        episode_open: bool,
+        pushed: u64,
+    ) -> Self {
+        let total: usize = chunks.iter().map(Chunk::len).sum();
+        let n = total.min(capacity);
+        let mut skip = total - n;
         let mut buf = Self::new(obs_dim, act_dim, capacity);
-        buf.obs[..obs.len()].copy_from_slice(obs);
-        buf.action[..action.len()].copy_from_slice(action);
-        buf.reward[..n].copy_from_slice(reward);
-        buf.next_obs[..next_obs.len()].copy_from_slice(next_obs);
+        let mut i = 0;
         let mut id = 0u64;
-        for i in 0..n {
-            buf.terminated[i] = terminated[i] != 0.0;
-            buf.step[i] = step[i] as u32;
-            if i == 0 || buf.step[i] == 0 {
-                id += 1;
+        for c in &chunks {
+            for k in 0..c.len() {
+                if skip > 0 {
+                    skip -= 1;
+                    continue;
+                }
+                buf.obs[i * obs_dim..(i + 1) * obs_dim]
+                    .copy_from_slice(&c.obs[k * obs_dim..(k + 1) * obs_dim]);
+                buf.next_obs[i * obs_dim..(i + 1) * obs_dim]
+                    .copy_from_slice(&c.next_obs[k * obs_dim..(k + 1) * obs_dim]);
+                buf.action[i * act_dim..(i + 1) * act_dim]
+                    .copy_from_slice(&c.action[k * act_dim..(k + 1) * act_dim]);
+                buf.reward[i] = c.reward[k];
+                buf.terminated[i] = c.terminated[k] != 0.0;
+                buf.step[i] = c.step[k] as u32;
+                if i == 0 || buf.step[i] == 0 {
+                    id += 1;
+                }
+                buf.episode[i] = id;
+                i += 1;
             }
-            buf.episode[i] = id;
         }
         buf.len = n;
         buf.head = n % capacity.max(1);
         buf.next_episode = id;
         buf.episode_open = episode_open && n > 0;
-        Ok(buf)
+        buf.pushed = pushed;
+        buf
     }
 
     /// Whether the last pushed transition's episode is still open (for checkpoints).
@@ -408,6 +463,62 @@ impl ReplayBuffer {
     /// Index of slot `i` inside its episode (tests and diagnostics).
     pub fn episode_step(&self, i: usize) -> u32 {
         self.step[i]
+    }
+}
+
+/// The arrays of one saved file (whole buffer or incremental chunk), oldest first.
+struct Chunk {
+    obs: Vec<f32>,
+    action: Vec<f32>,
+    reward: Vec<f32>,
+    next_obs: Vec<f32>,
+    terminated: Vec<f32>,
+    step: Vec<f32>,
+}
+
+impl Chunk {
+    fn len(&self) -> usize {
+        self.reward.len()
+    }
+
+    /// Reads a file written by [`ReplayBuffer::save`] or [`ReplayBuffer::save_since`],
+    /// checking every array's shape against the others and the buffer's widths.
+    fn read(path: &Path, obs_dim: usize, act_dim: usize) -> Result<Self, NnError> {
+        let mut file = load_tensors(path)?;
+        let mut take = |name: &str| -> Result<NamedTensor, NnError> {
+            file.remove(name).ok_or_else(|| NnError::MissingTensor {
+                path: path.to_path_buf(),
+                name: name.into(),
+            })
+        };
+        let (obs, action, reward) = (take("obs")?, take("action")?, take("reward")?);
+        let (next_obs, terminated, step) = (take("next_obs")?, take("terminated")?, take("step")?);
+        let n = reward.data.len();
+        for (t, width) in [
+            (&obs, obs_dim),
+            (&action, act_dim),
+            (&reward, 1),
+            (&next_obs, obs_dim),
+            (&terminated, 1),
+            (&step, 1),
+        ] {
+            if t.data.len() != n * width {
+                return Err(NnError::ShapeMismatch {
+                    path: path.to_path_buf(),
+                    name: t.name.clone(),
+                    expected: vec![n, width],
+                    found: t.shape.clone(),
+                });
+            }
+        }
+        Ok(Self {
+            obs: obs.data,
+            action: action.data,
+            reward: reward.data,
+            next_obs: next_obs.data,
+            terminated: terminated.data,
+            step: step.data,
+        })
     }
 }
 
@@ -535,6 +646,47 @@ mod tests {
         let b = back.sample_sequences(&mut ChaCha8Rng::seed_from_u64(2), 64, 3, 2);
         assert_eq!(a, b);
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn incremental_chunks_load_like_the_whole_buffer() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut buf = filled(&[6, 6, 6], 25);
+        let c1 = dir.path().join("c1.safetensors");
+        assert_eq!(buf.save_since(&c1, 0).unwrap(), 18);
+        let mark = buf.pushed();
+        // Wrap the ring: 14 more transitions, 7 of the first chunk's are overwritten.
+        for s in 0..14 {
+            let obs = [9.0, s as f32];
+            buf.push(Transition {
+                obs: &obs,
+                action: &[0.5],
+                reward: 2.0,
+                next_obs: &obs,
+                terminated: false,
+            });
+        }
+        let c2 = dir.path().join("c2.safetensors");
+        assert_eq!(buf.save_since(&c2, mark).unwrap(), 14);
+        let back = ReplayBuffer::load_chunks(
+            &[c1.as_path(), c2.as_path()],
+            2,
+            1,
+            25,
+            buf.episode_open(),
+            buf.pushed(),
+        )
+        .unwrap();
+        assert_eq!(back.len(), 25);
+        assert_eq!(back.pushed(), 32);
+        for seed in 0..4 {
+            let a = buf.sample_sequences(&mut ChaCha8Rng::seed_from_u64(seed), 64, 3, 2);
+            let b = back.sample_sequences(&mut ChaCha8Rng::seed_from_u64(seed), 64, 3, 2);
+            assert_eq!(a, b, "seed {seed}");
+        }
+        // More pushed since the mark than the buffer holds: the chunk is the whole buffer.
+        let c3 = dir.path().join("c3.safetensors");
+        assert_eq!(buf.save_since(&c3, 0).unwrap(), 25);
     }
 
     #[test]

@@ -108,6 +108,13 @@ pub enum Preset {
     Smoke,
 }
 
+/// The name of a preset as written on the command line and in `config.toml`.
+pub fn preset_name(preset: Preset) -> String {
+    preset
+        .to_possible_value()
+        .map_or_else(String::new, |v| v.get_name().to_owned())
+}
+
 /// Options shared by commands that train.
 #[derive(Debug, Clone, Args)]
 pub struct TrainOptions {
@@ -149,11 +156,18 @@ pub struct TrainArgs {
     /// Seed of every random stream in the run.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Run folder [default: `runs/<agent>-<env>-s<seed>`].
+    /// Run folder [default: `runs/<agent>-s<seed>`; `runs/<agent>-pendulum-s<seed>` on
+    /// the pendulum].
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
-    /// Continue the run in DIR from its last checkpoint (its config.toml is used).
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "config", "preset"])]
+    /// Continue the run in DIR from its last checkpoint (its config.toml is used; --seed,
+    /// --env, --urdf, --config and --preset cannot change it, --generations, --episodes,
+    /// --steps and --threads can). A run stopped before its first checkpoint starts over.
+    #[arg(
+        long,
+        value_name = "DIR",
+        conflicts_with_all = ["out", "config", "preset", "seed", "env", "urdf"]
+    )]
     pub resume: Option<PathBuf>,
     /// Shared training options.
     #[command(flatten)]

@@ -116,12 +116,41 @@ pub fn run(what: &BenchWhat) -> Result<()> {
     match what {
         BenchWhat::Env { steps, json } => {
             let r = esrl_sim::bench::bench_walk(&esrl_sim::WalkConfig::default(), *steps, 0)?;
-            let text = serde_json::to_string_pretty(&r)?;
+            let text = format!(
+                "walking env, one core: {:.0} control steps/s ({} steps in {:.2} s, {} episodes, \
+                 {:.0}× real time); physics dt {} s × {} substeps, {} solver iterations",
+                r.steps_per_s,
+                r.steps,
+                r.wall_s,
+                r.episodes,
+                r.realtime_factor,
+                r.dt,
+                r.substeps,
+                r.solver_iterations
+            );
             emit(*json, &r, text)
         }
         BenchWhat::Nn { json } => {
             let r = esrl_nn::bench::run(&esrl_nn::bench::BenchConfig::default())?;
-            let text = serde_json::to_string_pretty(&r)?;
+            let c = &r.config;
+            let ms = |x: Option<f64>| x.map_or_else(|| "–".to_string(), |v| format!("{v:.1} ms"));
+            let text = format!(
+                "forward + backward on {} × {} steps, one thread:\n  \
+                 LSTM actor ({} params) {:.2} ms, critic ({} params) {:.2} ms, SAC update {}\n  \
+                 MLP actor ({} params) {:.2} ms, critic ({} params) {:.2} ms, SAC update {}",
+                c.batch,
+                c.seq_len,
+                r.actor_params,
+                r.actor_ms,
+                r.critic_params,
+                r.critic_ms,
+                ms(r.sac_update_ms),
+                r.mlp_actor_params,
+                r.mlp_actor_ms,
+                r.mlp_critic_params,
+                r.mlp_critic_ms,
+                ms(r.mlp_sac_update_ms)
+            );
             emit(*json, &r, text)
         }
         BenchWhat::Update { arch, json } => {

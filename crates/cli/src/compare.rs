@@ -241,9 +241,19 @@ fn ensure_trained(plan: &Plan, progress: bool, label: &str) -> Result<bool> {
         &plan.config,
         &plan.dir,
         state == RunState::Resumable,
-        progress,
+        if progress {
+            crate::train::Display::Bar
+        } else {
+            crate::train::Display::Quiet
+        },
     )
     .with_context(|| format!("training {}", plan.dir.display()))?;
+    if crate::signals::requested().is_some() {
+        bail!(
+            "stopped by a signal; {} has a checkpoint, and the same command resumes it",
+            plan.dir.display()
+        );
+    }
     if run_state(&plan.dir)? != RunState::Finished {
         bail!(
             "training {} stopped before its budget was spent",
@@ -439,7 +449,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     // Ctrl-C stops every training at its next boundary with a checkpoint; running the same
     // command again resumes them.
-    crate::train::install_stop_handler();
+    crate::signals::install();
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
 
     let mut plans = Vec::new();

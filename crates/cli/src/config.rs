@@ -205,15 +205,158 @@ impl TrainConfig {
         if !self.agent.is_hybrid() && self.episodes == 0 {
             bail!("episodes = 0: needs at least one episode");
         }
+        if self.generations > MAX_ROWS {
+            bail!(
+                "generations = {}: at most {MAX_ROWS} (the paper runs 1500)",
+                self.generations
+            );
+        }
+        if self.episodes > MAX_ROWS {
+            bail!(
+                "episodes = {}: at most {MAX_ROWS} (the paper runs 1500)",
+                self.episodes
+            );
+        }
+        if self.max_env_steps == Some(0) {
+            bail!("max_env_steps = 0 (--steps 0): the budget must allow at least one step");
+        }
         if self.checkpoint_every == 0 {
             bail!("checkpoint_every = 0: must be ≥ 1");
         }
         self.rl.validate()?;
         self.es.validate()?;
-        self.network.validate()?;
+        self.network
+            .validate()
+            .context("in the [network] settings")?;
         self.walk.validate()?;
         Ok(())
     }
+}
+
+/// Most generations or episodes a run may ask for: 10⁷ (the paper runs 1500; a typo such as
+/// `--generations 1e12` is refused instead of promising a run that cannot end).
+pub const MAX_ROWS: usize = 10_000_000;
+
+/// What a run will hold in memory, by the setting that drives each part (bytes).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MemoryEstimate {
+    /// (setting, what, bytes), largest first.
+    pub parts: Vec<(&'static str, &'static str, u64)>,
+}
+
+impl MemoryEstimate {
+    /// Total bytes.
+    pub fn total(&self) -> u64 {
+        self.parts.iter().map(|p| p.2).sum()
+    }
+}
+
+/// "1.5 GiB", "320 MiB".
+pub fn human_bytes(b: u64) -> String {
+    let gib = b as f64 / (1u64 << 30) as f64;
+    if gib >= 1.0 {
+        format!("{gib:.1} GiB")
+    } else {
+        format!("{:.0} MiB", b as f64 / (1u64 << 20) as f64)
+    }
+}
+
+impl TrainConfig {
+    /// Estimates the memory a run needs before anything is allocated, from the settings and
+    /// the environment's sizes: the replay buffer, the networks with their optimiser state and
+    /// one batch of activations, and the population (genomes and the episodes held until they
+    /// enter the buffer). Within a small factor of the real use; meant to refuse what cannot
+    /// fit, not to plan to the megabyte.
+    pub fn memory_estimate(
+        &self,
+        obs_dim: usize,
+        act_dim: usize,
+        max_steps: usize,
+    ) -> MemoryEstimate {
+        let f = 4u64; // f32
+        let (o, a) = (obs_dim as u64, act_dim as u64);
+        let transition = f * (2 * o + a + 1) + 1 + 8 + 4;
+        let replay = self.rl.buffer_size as u64 * transition;
+        let actor = self.network.actor.param_count(obs_dim, act_dim) as u64;
+        let critic = self.network.critic.param_count(obs_dim, act_dim) as u64;
+        // Actor: weights, gradient, two Adam moments; critics: the same plus a target, ×2.
+        let weights = f * (4 * actor + 2 * 5 * critic);
+        let widths: u64 = self
+            .network
+            .actor
+            .fc
+            .iter()
+            .chain(&self.network.critic.obs_fc)
+            .chain(&self.network.critic.act_fc)
+            .chain(&self.network.critic.joint_fc)
+            .map(|&w| w as u64)
+            .sum::<u64>()
+            + 8 * (self.network.actor.lstm_hidden + self.network.critic.lstm_hidden) as u64;
+        let window = if self.network.recurrent() {
+            (self.rl.seq_len + self.rl.burn_in) as u64
+        } else {
+            1
+        };
+        // Forward values and their gradients, for the actor and three critic passes.
+        let activations = f * self.rl.batch_size as u64 * window * widths * 2 * 4;
+        let n = if self.agent.is_hybrid() {
+            self.es.population as u64
+        } else {
+            1
+        };
+        let k = if self.agent.is_hybrid() {
+            self.es.evaluations as u64 * 2
+        } else {
+            1
+        };
+        let population = n * (2 * f * actor + k * max_steps as u64 * transition);
+        let mut parts = vec![
+            ("rl.buffer_size", "replay buffer", replay),
+            ("network", "networks and optimiser state", weights),
+            ("rl.batch_size", "one batch of activations", activations),
+            (
+                "es.population × the actor's size",
+                "population genomes and episodes",
+                population,
+            ),
+        ];
+        parts.sort_by_key(|p| std::cmp::Reverse(p.2));
+        MemoryEstimate { parts }
+    }
+
+    /// Refuses a run whose memory estimate exceeds what the machine has available, naming
+    /// the setting that drives the largest part.
+    pub fn check_memory(&self, obs_dim: usize, act_dim: usize, max_steps: usize) -> Result<()> {
+        let est = self.memory_estimate(obs_dim, act_dim, max_steps);
+        let total = est.total();
+        let available = available_memory().unwrap_or(u64::MAX);
+        // Without /proc/meminfo, still refuse what no machine this tool targets has.
+        let limit = available.min(1 << 40);
+        if total > limit {
+            let (setting, what, bytes) = est.parts[0];
+            let breakdown = est
+                .parts
+                .iter()
+                .map(|(s, w, b)| format!("{w} ({s}): {}", human_bytes(*b)))
+                .collect::<Vec<_>>()
+                .join(", ");
+            bail!(
+                "this configuration needs about {} of memory but {} is available; the largest part is the {what}, {} from `{setting}`: lower it. ({breakdown})",
+                human_bytes(total),
+                human_bytes(limit),
+                human_bytes(bytes)
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Memory available to a new allocation (Linux `MemAvailable`), if known.
+fn available_memory() -> Option<u64> {
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// Lays `over` onto `base`, recursing into tables so a file can set one nested key.

@@ -84,6 +84,24 @@ pub fn locate(path: &Path) -> Result<(PathBuf, PathBuf)> {
             path.display()
         );
     }
+    // A checkpoint folder (it holds the weights; checkpoints also keep a copy of the run's
+    // config.toml, so test for the weights first).
+    if path.join("agent.safetensors").is_file() {
+        let abs = path
+            .canonicalize()
+            .with_context(|| format!("resolving {}", path.display()))?;
+        if let Some(run) = abs.parent().filter(|r| r.join(RunDir::CONFIG).is_file()) {
+            return Ok((run.to_path_buf(), path.to_path_buf()));
+        }
+        if path.join(RunDir::CONFIG).is_file() {
+            return Ok((path.to_path_buf(), path.to_path_buf()));
+        }
+        bail!(
+            "{} looks like a checkpoint folder, but neither it nor its parent folder has a \
+             config.toml, so the architecture of the networks is unknown",
+            path.display()
+        );
+    }
     if path.join(RunDir::CONFIG).is_file() {
         let ckpt = checkpoint::find(path).with_context(|| {
             format!(
@@ -93,19 +111,6 @@ pub fn locate(path: &Path) -> Result<(PathBuf, PathBuf)> {
             )
         })?;
         return Ok((path.to_path_buf(), ckpt));
-    }
-    if path.join("agent.safetensors").is_file() {
-        let abs = path
-            .canonicalize()
-            .with_context(|| format!("resolving {}", path.display()))?;
-        if let Some(run) = abs.parent().filter(|r| r.join(RunDir::CONFIG).is_file()) {
-            return Ok((run.to_path_buf(), path.to_path_buf()));
-        }
-        bail!(
-            "{} looks like a checkpoint folder, but its parent folder has no config.toml, so \
-             the architecture of the networks is unknown",
-            path.display()
-        );
     }
     bail!(
         "{} is neither a run folder (no config.toml) nor a checkpoint folder (no \

@@ -13,11 +13,15 @@ fn main() -> ExitCode {
         Command::Compare(args) => esrl::compare::run(args),
         Command::Record(args) => esrl::record::run(args),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+    // A stop signal ends a command with the conventional status once its checkpoint is
+    // written, whether the command then returned normally or with the error saying so.
+    let stopped = esrl::signals::requested().map(esrl::signals::exit_status);
+    match (result, stopped) {
+        (Ok(()), None) => ExitCode::SUCCESS,
+        (Ok(()), Some(status)) => ExitCode::from(status),
+        (Err(e), stopped) => {
+            eprintln!("error: {}", esrl::error_chain(&e));
+            stopped.map_or(ExitCode::FAILURE, ExitCode::from)
         }
     }
 }

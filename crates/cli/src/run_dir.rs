@@ -72,9 +72,14 @@ impl RunDir {
     /// already written is lost; use [`RunDir::resume`] to continue one.
     pub fn create(root: &Path, config_toml: &str) -> Result<Self> {
         if root.join(Self::JSONL).exists() {
+            let how = if root.join(Self::CHECKPOINT).exists() {
+                "continues it from its last checkpoint"
+            } else {
+                "starts it over (it stopped before its first checkpoint)"
+            };
             anyhow::bail!(
-                "{} already holds a run (metrics.jsonl exists); pass --resume {} to continue it \
-                 or choose another --out",
+                "{} already holds a run; `--resume {}` instead of `--out` {how}, or choose \
+                 another --out",
                 root.display(),
                 root.display()
             );

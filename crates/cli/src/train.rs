@@ -1,10 +1,11 @@
 //! `esrl train`: builds the learner from the resolved config, runs it with a progress bar,
 //! writes metrics row by row, checkpoints, and resumes.
 
-use crate::args::{AgentKind, EnvKind, TrainArgs};
+use crate::args::{AgentKind, EnvKind, Preset, TrainArgs};
 use crate::checkpoint::{self, CheckpointState, Learner};
 use crate::config::TrainConfig;
 use crate::run_dir::RunDir;
+use crate::signals;
 use anyhow::{bail, Context, Result};
 use esrl_agents::{Agent, AgentError, Algo, Trainer};
 use esrl_es::Hybrid;
@@ -14,7 +15,6 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -28,15 +28,20 @@ pub fn env_factory(cfg: &TrainConfig) -> Result<EnvFactory> {
         EnvKind::Pendulum => Ok(Arc::new(|| Box::new(Pendulum::new()) as Box<dyn Env>)),
         EnvKind::Walk => {
             let model = match &cfg.walk.urdf {
-                Some(path) => Arc::new(
-                    RobotModel::from_urdf_path(path)
-                        .with_context(|| format!("loading URDF {}", path.display()))?,
-                ),
+                Some(path) => Arc::new(RobotModel::from_urdf_path(path).map_err(|e| {
+                    // The read error names the file itself; the others need it said.
+                    match e {
+                        esrl_sim::UrdfError::Io { .. } => anyhow::Error::new(e),
+                        e => anyhow::Error::new(e).context(format!("in URDF {}", path.display())),
+                    }
+                })?),
                 None => RobotModel::humanoid_shared().context("loading the embedded humanoid")?,
             };
             let walk = cfg.walk.clone();
-            WalkEnv::from_model(model.clone(), walk.clone())
-                .context("building the walking environment")?;
+            WalkEnv::from_model(model.clone(), walk.clone()).with_context(|| match &walk.urdf {
+                Some(p) => format!("building the walking environment from {}", p.display()),
+                None => "building the walking environment".into(),
+            })?;
             Ok(Arc::new(move || {
                 Box::new(
                     WalkEnv::from_model(model.clone(), walk.clone())
@@ -45,19 +50,6 @@ pub fn env_factory(cfg: &TrainConfig) -> Result<EnvFactory> {
             }))
         }
     }
-}
-
-/// Set by Ctrl-C: every training in the process stops at its next generation/episode
-/// boundary, writes a checkpoint and returns.
-pub static STOP: AtomicBool = AtomicBool::new(false);
-
-/// Installs the Ctrl-C handler that sets [`STOP`] (once per process; later calls do nothing).
-pub fn install_stop_handler() {
-    static ONCE: std::sync::Once = std::sync::Once::new();
-    ONCE.call_once(|| {
-        // Failure only loses the graceful stop (another handler owns the signal).
-        let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
-    });
 }
 
 /// The RL algorithm behind an agent kind.
@@ -146,20 +138,42 @@ pub struct Summary {
     pub rl_replaced_share: Option<f64>,
 }
 
-/// Where a run goes by default.
+/// Where a run goes by default: `runs/<agent>-s<seed>` on the walking env (the same name
+/// `esrl compare` gives its runs), `runs/<agent>-<env>-s<seed>` on another env.
 pub fn default_out(cfg: &TrainConfig) -> PathBuf {
-    let env = match cfg.env {
-        EnvKind::Walk => "walk",
-        EnvKind::Pendulum => "pendulum",
+    let name = match cfg.env {
+        EnvKind::Walk => format!("{}-s{}", cfg.agent.name(), cfg.seed),
+        EnvKind::Pendulum => format!("{}-pendulum-s{}", cfg.agent.name(), cfg.seed),
     };
-    PathBuf::from("runs").join(format!("{}-{env}-s{}", cfg.agent.name(), cfg.seed))
+    PathBuf::from("runs").join(name)
 }
 
-/// Runs `esrl train`.
-pub fn run(args: &TrainArgs) -> Result<PathBuf> {
-    let (cfg, root, resume) = match &args.resume {
+/// How a training reports progress.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Display {
+    /// A progress bar on a terminal; log lines every 10 s when stderr is not a terminal.
+    Bar,
+    /// Log lines every 10 s (`--no-progress`), flushed as they go, so a redirected log
+    /// follows the run.
+    Log,
+    /// Nothing but errors (runs trained side by side by `esrl compare`).
+    Quiet,
+}
+
+/// Runs `esrl train`. Returns the run folder, and whether the budget was completed (false
+/// after a stop signal).
+pub fn run(args: &TrainArgs) -> Result<(PathBuf, bool)> {
+    let (mut cfg, root, resume) = match &args.resume {
         Some(dir) => {
-            let cfg = TrainConfig::load(&dir.join(RunDir::CONFIG))?;
+            let path = dir.join(RunDir::CONFIG);
+            if !path.exists() {
+                bail!(
+                    "{} is not a run folder (it has no {}); start a new run with --out",
+                    dir.display(),
+                    RunDir::CONFIG
+                );
+            }
+            let cfg = TrainConfig::load(&path)?;
             if cfg.agent != args.agent {
                 bail!(
                     "{} is a {} run, not {}",
@@ -176,9 +190,10 @@ pub fn run(args: &TrainArgs) -> Result<PathBuf> {
             (cfg, root, false)
         }
     };
-    let mut cfg = cfg;
-    // Budget flags may extend a resumed run.
     if resume {
+        // Budget and thread flags may change a resumed run; the stored config follows, so
+        // `--config RUN/config.toml` keeps repeating the run as it now is.
+        let before = cfg.clone();
         if let Some(g) = args.opts.generations {
             cfg.generations = g;
         }
@@ -191,53 +206,123 @@ pub fn run(args: &TrainArgs) -> Result<PathBuf> {
         if let Some(t) = args.opts.threads {
             cfg.threads = t;
         }
+        cfg.validate()?;
+        if cfg != before {
+            crate::run_dir::write_atomic(&root.join(RunDir::CONFIG), cfg.to_toml()?.as_bytes())?;
+        }
     }
-    train(&cfg, &root, resume, !args.opts.no_progress)?;
-    Ok(root)
+    let display = if args.opts.no_progress {
+        Display::Log
+    } else {
+        Display::Bar
+    };
+    let finished = train(&cfg, &root, resume, display)?;
+    Ok((root, finished))
 }
 
-/// Trains `cfg` into `root` (a new folder, or an existing one when `resume`).
-pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Result<()> {
-    let make_env = env_factory(cfg)?;
-    let mut learner = build_learner(cfg, &make_env)?;
-    let mut state = CheckpointState {
-        version: 1,
-        rows: 0,
-        episodes: 0,
-        generations: 0,
-        env_steps: 0,
-        trainer_rng: learner.trainer().rng.clone(),
-        agent_updates: 0,
-        agent_rng: learner.trainer().agent.counters().1,
-        episode_open: false,
-        sigma: None,
-        es_generation: None,
-        rl_trained: None,
-        loop_stats: None,
-        wall_s: 0.0,
-        curve: Vec::new(),
-        q0: Vec::new(),
+/// What a user should know before a run starts: what runs, how much, where, how to stop.
+pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
+    let agent = cfg.agent.name();
+    let preset = crate::args::preset_name(cfg.preset);
+    let env = match cfg.env {
+        EnvKind::Walk => "walk",
+        EnvKind::Pendulum => "pendulum",
     };
-    let mut run = if resume {
-        let dir = checkpoint::find(root).with_context(|| {
-            format!(
-                "{} has no complete checkpoint to resume from",
-                root.display()
-            )
-        })?;
-        state = checkpoint::load_state(&dir)?;
-        checkpoint::restore(&dir, &mut learner, &state)?;
-        eprintln!(
-            "resuming {} from {} ({} rows, {} env steps)",
-            root.display(),
-            dir.display(),
-            state.rows,
-            state.env_steps
-        );
-        RunDir::resume(root, state.rows)?
+    let budget = if cfg.agent.is_hybrid() {
+        format!(
+            "{} generations × {} individuals × {} rollout(s), {} inner cycles per generation",
+            cfg.generations, cfg.es.population, cfg.es.evaluations, cfg.inner_cycles
+        )
     } else {
-        RunDir::create(root, &cfg.to_toml()?)?
+        format!("{} episodes", cfg.episodes)
     };
+    let steps = cfg
+        .max_env_steps
+        .map(|s| format!(", at most {s} env steps"))
+        .unwrap_or_default();
+    let typical = match (cfg.preset, cfg.agent.is_hybrid(), cfg.env) {
+        (Preset::Paper, true, EnvKind::Walk) => {
+            "\n  time:   the paper's budget: hours (5–8 h for ES-SAC on 2 cores, by its own ETA); \
+             `--preset quick` shows learning in a few minutes"
+        }
+        _ => "",
+    };
+    format!(
+        "esrl train {agent} · preset {preset} · env {env} · seed {seed}{action}\n  \
+         budget: {budget}{steps}{typical}\n  \
+         run:    {dir} (config.toml, metrics.csv, checkpoint/ every {every} rows)\n  \
+         stop:   Ctrl-C or SIGTERM finishes the current {unit}, checkpoints and exits; \
+         continue with `esrl train {agent} --resume {dir}`\n  \
+         time:   an estimate follows once the first {unit}s are measured",
+        seed = cfg.seed,
+        action = if resume { " · resuming" } else { "" },
+        dir = root.display(),
+        every = cfg.checkpoint_every,
+        unit = if cfg.agent.is_hybrid() {
+            "generation"
+        } else {
+            "episode"
+        },
+    )
+}
+
+/// "1 h 05 min", "4 min 10 s", "12 s".
+pub fn human_duration(seconds: f64) -> String {
+    let s = seconds.max(0.0).round() as u64;
+    match s {
+        0..=59 => format!("{s} s"),
+        60..=3599 => format!("{} min {:02} s", s / 60, s % 60),
+        _ => format!("{} h {:02} min", s / 3600, (s % 3600) / 60),
+    }
+}
+
+/// Trains `cfg` into `root` (a new folder, or an existing one when `resume`). Returns
+/// whether the budget was completed (false when a stop signal ended it early, after a
+/// checkpoint).
+pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> Result<bool> {
+    let make_env = env_factory(cfg)?;
+    {
+        let env = make_env();
+        cfg.check_memory(env.obs_dim(), env.act_dim(), env.max_episode_steps())?;
+    }
+    let mut learner = build_learner(cfg, &make_env)?;
+    let mut state = CheckpointState::fresh(&learner);
+    let mut run = match (resume, checkpoint::find(root)) {
+        (true, Some(dir)) => {
+            state = checkpoint::load_state(&dir)?;
+            checkpoint::check_config(&dir, cfg)?;
+            checkpoint::check_state(root, &dir, &state, cfg)?;
+            checkpoint::restore(&dir, &mut learner, &state)?;
+            let run = RunDir::resume(root, state.rows)?;
+            if display != Display::Quiet {
+                eprintln!(
+                    "resuming {} from {} ({} rows, {} env steps)",
+                    root.display(),
+                    dir.display(),
+                    state.rows,
+                    state.env_steps
+                );
+            }
+            run
+        }
+        (true, None) => {
+            // Killed before its first checkpoint: nothing to lose but the rows of an
+            // unfinished first stretch, so the run starts over in its own folder.
+            eprintln!(
+                "{} has no checkpoint yet (stopped before its first one): starting it over from \
+                 the beginning with its config.toml",
+                root.display()
+            );
+            checkpoint::remove_best(root)?;
+            let run = RunDir::resume(root, 0)?;
+            crate::run_dir::write_atomic(&root.join(RunDir::CONFIG), cfg.to_toml()?.as_bytes())?;
+            run
+        }
+        (false, _) => RunDir::create(root, &cfg.to_toml()?)?,
+    };
+    if display != Display::Quiet {
+        eprintln!("{}", banner(cfg, root, resume));
+    }
 
     let threads = if cfg.threads == 0 {
         std::thread::available_parallelism().map_or(1, |n| n.get())
@@ -249,19 +334,21 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Re
         .build()
         .context("starting the rollout thread pool")?;
 
-    install_stop_handler();
-    let stop = &STOP;
+    signals::install();
 
-    let total = if cfg.agent.is_hybrid() {
-        cfg.generations
+    let (total, unit) = if cfg.agent.is_hybrid() {
+        (cfg.generations, "generation")
     } else {
-        cfg.episodes
+        (cfg.episodes, "episode")
     };
-    let bar = progress_bar(total, state.rows, progress);
+    let bar = progress_bar(total, state.rows, display);
+    let log = display != Display::Quiet && bar.is_hidden();
     let mut last_log = Instant::now();
     let started = Instant::now();
+    let rows_at_start = state.rows;
     let wall0 = state.wall_s;
     let mut finished = false;
+    let mut eta_told = false;
 
     if let Learner::Hybrid(h) = &mut learner {
         let mut env = make_env();
@@ -278,7 +365,7 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Re
             finished = true;
             break;
         }
-        if stop.load(Ordering::SeqCst) {
+        if signals::requested().is_some() {
             break;
         }
         let (row, curve, q0, msg) = match &mut learner {
@@ -286,8 +373,12 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Re
                 Ok(r) => {
                     let wall = wall0 + started.elapsed().as_secs_f64();
                     let msg = format!(
-                        "gen {} best {:.1} rl {:.1} σ {:.3}",
-                        r.generation, r.best_fitness, r.rl_fitness, r.sigma
+                        "gen {}: best {:.1}, RL actor {:.1}{}, σ {:.3}",
+                        r.generation,
+                        r.best_fitness,
+                        r.rl_fitness,
+                        if r.rl_replaced { " (replaced)" } else { "" },
+                        r.sigma
                     );
                     let mut v = serde_json::to_value(&r)?;
                     if let Some(m) = v.as_object_mut() {
@@ -305,7 +396,10 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Re
                 match t.episode(env.as_mut()) {
                     Ok(r) => {
                         let wall = wall0 + started.elapsed().as_secs_f64();
-                        let msg = format!("ep {} return {:.1} len {}", r.episode, r.ret, r.length);
+                        let msg = format!(
+                            "episode {}: return {:.1}, {} steps",
+                            r.episode, r.ret, r.length
+                        );
                         let row = EpisodeRow {
                             episode: r.episode,
                             env_steps: r.env_steps,
@@ -357,11 +451,32 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Re
         state.q0.push(q0);
         let best = previous_best.max(curve);
         bar.set_position(state.rows as u64);
-        bar.set_message(format!("{msg} | best {best:.1}"));
-        if !bar.is_hidden() {
-            // drawn by indicatif
-        } else if progress && last_log.elapsed().as_secs_f64() > 10.0 {
-            eprintln!("[{}/{}] {msg} | best {best:.1}", state.rows, total);
+        bar.set_message(format!("{msg} | best so far {best:.1}"));
+        let elapsed = started.elapsed().as_secs_f64();
+        let measured = state.rows - rows_at_start;
+        if !eta_told && display != Display::Quiet && (measured >= 3 || elapsed > 30.0) {
+            eta_told = true;
+            let left = total.saturating_sub(state.rows);
+            let pace = elapsed / measured as f64;
+            let text = format!(
+                "pace: {:.1} s per {unit} over the first {measured}: about {} for the {left} left \
+                 (episodes lengthen as the policy learns to stay up, so likely more)",
+                pace,
+                human_duration(pace * left as f64)
+            );
+            if bar.is_hidden() {
+                eprintln!("{text}");
+            } else {
+                bar.println(text);
+            }
+        }
+        if log && last_log.elapsed().as_secs_f64() > 10.0 {
+            eprintln!(
+                "[{}/{}] {msg} | best so far {best:.1} | {}",
+                state.rows,
+                total,
+                human_duration(wall0 + elapsed)
+            );
             last_log = Instant::now();
         }
         write_summary(
@@ -375,6 +490,7 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Re
         if state.rows % cfg.checkpoint_every == 0 {
             save_checkpoint(
                 root,
+                cfg,
                 &learner,
                 &mut state,
                 wall0 + started.elapsed().as_secs_f64(),
@@ -391,29 +507,31 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, progress: bool) -> Re
             root.join(RunDir::CHECKPOINT).display()
         );
     }
-    save_checkpoint(root, &learner, &mut state, wall)?;
+    save_checkpoint(root, cfg, &learner, &mut state, wall)?;
     write_summary(&run, cfg, &learner, &state, wall, finished)?;
-    if finished {
-        eprintln!(
-            "done: {} rows, {} env steps, {:.0} s → {}",
-            state.rows,
-            learner.trainer().env_steps,
-            wall,
-            root.display()
-        );
-    } else {
-        eprintln!(
-            "interrupted after {} rows; checkpoint written. Continue with: esrl train {} --resume {}",
-            state.rows,
-            cfg.agent.name(),
-            root.display()
-        );
+    if display != Display::Quiet {
+        if finished {
+            eprintln!(
+                "done: {} rows, {} env steps, {} → {}",
+                state.rows,
+                learner.trainer().env_steps,
+                human_duration(wall),
+                root.display()
+            );
+        } else {
+            eprintln!(
+                "stopped after {} rows; checkpoint written. Continue with: esrl train {} --resume {}",
+                state.rows,
+                cfg.agent.name(),
+                root.display()
+            );
+        }
     }
-    Ok(())
+    Ok(finished)
 }
 
-fn progress_bar(total: usize, done: usize, show: bool) -> ProgressBar {
-    if !show || !std::io::stderr().is_terminal() {
+fn progress_bar(total: usize, done: usize, display: Display) -> ProgressBar {
+    if display != Display::Bar || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
     }
     let bar = ProgressBar::new(total as u64);
@@ -429,6 +547,7 @@ fn progress_bar(total: usize, done: usize, show: bool) -> ProgressBar {
 
 fn save_checkpoint(
     root: &Path,
+    cfg: &TrainConfig,
     learner: &Learner,
     state: &mut CheckpointState,
     wall: f64,
@@ -449,7 +568,7 @@ fn save_checkpoint(
         state.rl_trained = Some(h.rl_trained);
         state.loop_stats = Some(h.stats.clone());
     }
-    checkpoint::save(root, learner, state)
+    checkpoint::save(root, cfg, learner, state)
 }
 
 fn write_summary(

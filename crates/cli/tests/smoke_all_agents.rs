@@ -36,14 +36,20 @@ fn every_agent_writes_a_complete_run_folder() {
         for f in [
             "agent.safetensors",
             "actor.safetensors",
-            "replay.safetensors",
             "state.json",
+            "config.toml",
+            "manifest.json",
         ] {
             assert!(
                 dir.join("checkpoint").join(f).is_file(),
                 "{agent}: missing checkpoint/{f}"
             );
         }
+        let chunks = std::fs::read_dir(dir.join("replay")).unwrap().count();
+        assert!(
+            chunks >= 1,
+            "{agent}: the replay buffer has chunks in RUN/replay/"
+        );
         let jsonl = std::fs::read_to_string(dir.join("metrics.jsonl")).unwrap();
         assert_eq!(jsonl.lines().count(), 2, "{agent}: smoke preset has 2 rows");
         let csv = std::fs::read_to_string(dir.join("metrics.csv")).unwrap();

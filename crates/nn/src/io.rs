@@ -50,6 +50,7 @@ pub fn save_tensors(
         path: path.to_path_buf(),
         reason: e.to_string(),
     })?;
+    let out = canonical_metadata(out);
     let io = |source| NnError::Io {
         path: path.to_path_buf(),
         source,
@@ -57,6 +58,45 @@ pub fn save_tensors(
     let tmp = path.with_extension("safetensors.tmp");
     std::fs::write(&tmp, &out).map_err(io)?;
     std::fs::rename(&tmp, path).map_err(io)
+}
+
+/// Rewrites the header of a serialised safetensors file with its `__metadata__` keys sorted.
+///
+/// The safetensors crate writes the metadata map in `HashMap` order, which changes from run to
+/// run, so identical tensors would give files with different bytes (and hashes). The header is
+/// JSON padded with spaces to a multiple of 8 bytes; the same entries in another order have the
+/// same compact length, so the rewrite keeps every offset. Anything unexpected leaves the bytes
+/// as they were.
+fn canonical_metadata(mut bytes: Vec<u8>) -> Vec<u8> {
+    let Some(len) = bytes
+        .get(..8)
+        .and_then(|b| <[u8; 8]>::try_from(b).ok())
+        .map(|b| u64::from_le_bytes(b) as usize)
+    else {
+        return bytes;
+    };
+    let Some(header) = bytes.get(8..8 + len) else {
+        return bytes;
+    };
+    let Ok(serde_json::Value::Object(mut top)) = serde_json::from_slice(header) else {
+        return bytes;
+    };
+    let Some(serde_json::Value::Object(meta)) = top.get_mut("__metadata__") else {
+        return bytes;
+    };
+    let sorted: std::collections::BTreeMap<String, serde_json::Value> =
+        std::mem::take(meta).into_iter().collect();
+    *meta = sorted.into_iter().collect();
+    let Ok(text) = serde_json::to_vec(&top) else {
+        return bytes;
+    };
+    if text.len() > len {
+        return bytes;
+    }
+    let mut padded = text;
+    padded.resize(len, b' ');
+    bytes[8..8 + len].copy_from_slice(&padded);
+    bytes
 }
 
 /// Reads every F32 tensor of a safetensors file, keyed by name. Other dtypes are an error

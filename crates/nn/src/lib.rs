@@ -185,7 +185,7 @@ pub use io::{load_params, load_tensors, save_params, save_tensors, NamedTensor};
 pub use layers::{Linear, Lstm, LstmOutput, LstmState, Mlp};
 pub use nets::{
     Actor, ActorConfig, ActorOutput, ActorStepState, Critic, CriticConfig, CriticOutput, Module,
-    PolicySample,
+    PolicySample, MAX_WIDTH,
 };
 pub use ops::Act;
 pub use optim::{clip_grad_norm, Adam, AdamConfig, AdamState};

@@ -23,26 +23,39 @@ pub trait Module {
     }
 }
 
+/// Largest layer width or LSTM size accepted: far above any locomotion network (the paper's
+/// widest layer is 256), low enough that one layer's weights cannot exhaust memory by a typo.
+pub const MAX_WIDTH: usize = 16_384;
+
 fn check_widths(field: &str, widths: &[usize]) -> Result<(), NnError> {
-    if let Some(k) = widths.iter().position(|&w| w == 0) {
-        return Err(NnError::Config {
-            field: format!("{field}[{k}]"),
-            value: "0".into(),
-            reason: "layer width must be ≥ 1".into(),
-        });
+    for (k, &w) in widths.iter().enumerate() {
+        check_dim(&format!("{field}[{k}]"), w)?;
     }
     Ok(())
 }
 
 fn check_dim(field: &str, v: usize) -> Result<(), NnError> {
-    if v == 0 {
+    if v == 0 || v > MAX_WIDTH {
         return Err(NnError::Config {
             field: field.into(),
-            value: "0".into(),
-            reason: "must be ≥ 1".into(),
+            value: v.to_string(),
+            reason: format!("must be in 1..={MAX_WIDTH}"),
         });
     }
     Ok(())
+}
+
+/// Parameters of an MLP from `input` through `widths` (weights and biases).
+fn mlp_params(input: usize, widths: &[usize]) -> (usize, usize) {
+    widths
+        .iter()
+        .fold((0, input), |(n, d), &w| (n + (d + 1) * w, w))
+}
+
+/// Parameters of an LSTM layer: four gates, each with input and recurrent weights and one
+/// bias vector.
+fn lstm_params(input: usize, hidden: usize) -> usize {
+    4 * hidden * (input + hidden + 1)
 }
 
 /// Sizes of the actor (paper Fig. 1a).
@@ -87,6 +100,17 @@ impl ActorConfig {
             recurrent: false,
             ..Self::default()
         }
+    }
+
+    /// Parameter count of this actor for the given sizes, without building it (memory
+    /// estimates before allocation).
+    pub fn param_count(&self, obs_dim: usize, act_dim: usize) -> usize {
+        let (mut n, mut d) = mlp_params(obs_dim, &self.fc);
+        if self.recurrent {
+            n += lstm_params(d, self.lstm_hidden);
+            d = self.lstm_hidden;
+        }
+        n + 2 * (d + 1) * act_dim
     }
 
     /// Checks every field; errors name the field.
@@ -151,6 +175,19 @@ impl CriticConfig {
             recurrent: false,
             lstm_hidden: 0,
         }
+    }
+
+    /// Parameter count of one critic for the given sizes, without building it.
+    pub fn param_count(&self, obs_dim: usize, act_dim: usize) -> usize {
+        let (n_obs, d_obs) = mlp_params(obs_dim, &self.obs_fc);
+        let (n_act, d_act) = mlp_params(act_dim, &self.act_fc);
+        let (n_joint, mut d) = mlp_params(d_obs + d_act, &self.joint_fc);
+        let mut n = n_obs + n_act + n_joint;
+        if self.recurrent {
+            n += lstm_params(d, self.lstm_hidden);
+            d = self.lstm_hidden;
+        }
+        n + d + 1
     }
 
     /// Checks every field; errors name the field.

@@ -20,6 +20,15 @@ pub enum UrdfError {
     /// The robot has no link.
     #[error("URDF has no <link>")]
     NoLinks,
+    /// More links than a walking robot needs; a bound so that a runaway file (a generated
+    /// 10,000-link chain) is refused at once instead of exhausting memory in the solver.
+    #[error("URDF has {count} links; at most {max} are supported")]
+    TooManyLinks {
+        /// Links in the file.
+        count: usize,
+        /// The bound, [`crate::MAX_LINKS`].
+        max: usize,
+    },
     /// Two links share a name.
     #[error("duplicate link name `{0}`")]
     DuplicateLink(String),

@@ -139,7 +139,7 @@ pub use env::{Env, GaitSample, Step, StepInfo};
 pub use error::{SimError, UrdfError};
 pub use model::{
     JointKind, JointModel, LinkGeometry, LinkModel, LinkPose, RobotModel, Shape, ShapeGeometry,
-    HUMANOID_URDF,
+    HUMANOID_URDF, MAX_LINKS,
 };
 pub use pendulum::Pendulum;
 pub use sim::{Base, PhysicsConfig, RobotSim, RobotState, SimSetup};

@@ -151,6 +151,9 @@ impl JointModel {
     }
 }
 
+/// Most links a URDF may have (the humanoid has 14; a few hundred covers any legged robot).
+pub const MAX_LINKS: usize = 256;
+
 /// A robot parsed from URDF and validated: a tree of links with physical inertials and
 /// primitive collision shapes, joined by revolute, continuous or fixed joints.
 ///
@@ -210,6 +213,12 @@ impl RobotModel {
     pub fn from_urdf_robot(robot: &urdf_rs::Robot) -> Result<Self, UrdfError> {
         if robot.links.is_empty() {
             return Err(UrdfError::NoLinks);
+        }
+        if robot.links.len() > MAX_LINKS {
+            return Err(UrdfError::TooManyLinks {
+                count: robot.links.len(),
+                max: MAX_LINKS,
+            });
         }
         let mut index = HashMap::new();
         for (i, l) in robot.links.iter().enumerate() {

@@ -29,6 +29,10 @@ from ._native import (
 )
 from .policy import Policy, load_policy
 from .run import Run, group_by_agent, load_run, load_runs
+from ._registry import register as _register_envs
+
+# `gym.make("esrl/Walk-v0")` works right after `import esrl_rs` (no-op without gymnasium).
+_register_envs()
 
 __all__ = [
     "EsrlError",

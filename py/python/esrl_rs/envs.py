@@ -21,6 +21,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from . import _registry
 from ._native import EnvCore
 
 __all__ = ["Pendulum", "WalkEnv"]
@@ -114,11 +115,4 @@ class Pendulum(_RustEnv):
         super().__init__(core, -high, high, render_mode)
 
 
-def _register() -> None:
-    for env_id, entry in (("esrl/Walk-v0", "esrl_rs.envs:WalkEnv"),
-                          ("esrl/Pendulum-v0", "esrl_rs.envs:Pendulum")):
-        if env_id not in gym.registry:
-            gym.register(id=env_id, entry_point=entry)
-
-
-_register()
+_registry.register()

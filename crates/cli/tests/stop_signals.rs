@@ -1,0 +1,99 @@
+//! Contract: SIGTERM and SIGINT stop a training like a finished generation: the signal is
+//! acknowledged at once, a checkpoint is written, the command exits with 128 + the signal
+//! (143, 130), and `--resume` then produces exactly the rows and weights of an uninterrupted
+//! run.
+#![cfg(unix)]
+
+mod common;
+
+use common::{ok, rows, tensors};
+use std::io::Read;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn row_count(dir: &Path) -> usize {
+    std::fs::read_to_string(dir.join("metrics.jsonl"))
+        .map(|t| t.lines().count())
+        .unwrap_or(0)
+}
+
+fn stop_and_resume(signal: &str, status: i32) {
+    let tmp = tempfile::tempdir().unwrap();
+    let (straight, split) = (tmp.path().join("straight"), tmp.path().join("split"));
+    let args = |dir: &Path| {
+        vec![
+            "train".to_string(),
+            "es-td3".into(),
+            "--preset".into(),
+            "smoke".into(),
+            "--seed".into(),
+            "4".into(),
+            "--generations".into(),
+            "60".into(),
+            "--threads".into(),
+            "1".into(),
+            "--out".into(),
+            dir.to_str().unwrap().into(),
+        ]
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
+        .args(args(&split))
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    while row_count(&split) < 3 {
+        assert!(started.elapsed() < Duration::from_secs(120), "no rows");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let sent = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let exit = child.wait().unwrap();
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    assert_eq!(exit.code(), Some(status), "{signal}: {stderr}");
+    assert!(
+        stderr.contains("received: finishing the current"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("--resume"), "{stderr}");
+    let stopped_at = row_count(&split);
+    assert!(stopped_at < 60, "stopped early");
+    let state: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(split.join("checkpoint/state.json")).unwrap(),
+    )
+    .unwrap();
+    assert_eq!(
+        state["rows"], stopped_at,
+        "the checkpoint covers every written row"
+    );
+
+    ok(&["train", "es-td3", "--resume", split.to_str().unwrap()]);
+    let straight_args = args(&straight);
+    let refs: Vec<&str> = straight_args.iter().map(String::as_str).collect();
+    ok(&refs);
+    assert_eq!(rows(&straight), rows(&split), "{signal}");
+    assert_eq!(
+        tensors(&straight.join("checkpoint/agent.safetensors")),
+        tensors(&split.join("checkpoint/agent.safetensors"))
+    );
+}
+
+#[test]
+fn sigterm_checkpoints_exits_143_and_resumes_exactly() {
+    stop_and_resume("-TERM", 143);
+}
+
+#[test]
+fn sigint_checkpoints_exits_130_and_resumes_exactly() {
+    stop_and_resume("-INT", 130);
+}
