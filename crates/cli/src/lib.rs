@@ -9,4 +9,5 @@ pub mod config;
 pub mod eval;
 pub mod record;
 pub mod run_dir;
+pub mod stick;
 pub mod train;

@@ -38,7 +38,9 @@
 //! # Gait class ([`classify_gait`]), rules in order
 //!
 //! 1. **`fall`**: the episode ended in a fall before [`GaitThresholds::min_touchdowns`]
-//!    touchdowns (two strides): it fell before showing a gait.
+//!    touchdowns or within [`GaitThresholds::min_duration`]: it fell before it could show a
+//!    gait (the bounces of a toppling robot are no steps). A rollout that falls later is
+//!    classified by what it did before (its `fell` is reported beside the class).
 //! 2. **`stand`** / **`shuffle`**: fewer than `min_touchdowns` touchdowns or a cadence below
 //!    [`GaitThresholds::min_cadence`] (60 steps/min): not stepping. `shuffle` when the feet
 //!    still travel ([`GaitThresholds::still_speed`], sliding across the floor), else `stand`
@@ -89,6 +91,9 @@ pub struct GaitThresholds {
     /// Default 4 (esrl's choice: one stride per foot is the least that shows a pattern, two
     /// the least that shows it repeat).
     pub min_touchdowns: usize,
+    /// An episode that falls sooner than this has shown no gait (`fall`), s. Default 2: two
+    /// strides of normal human walking (stride time about 1 s: Perry & Burnfield 2010).
+    pub min_duration: f64,
     /// Below this cadence the robot is not stepping (`stand` or `shuffle`), steps/min.
     /// Default 60: the slowest cadence band that free-living adults walk in (60–79
     /// steps/min; below 60 is incidental movement: Tudor-Locke et al. 2011, "Patterns of
@@ -130,6 +135,7 @@ impl Default for GaitThresholds {
             contact_force: 10.0,
             sync_window: 0.05,
             min_touchdowns: 4,
+            min_duration: 2.0,
             min_cadence: 60.0,
             min_synchronous: 0.5,
             min_alternation: 0.5,
@@ -147,6 +153,7 @@ impl GaitThresholds {
         let fields = [
             ("contact_force", self.contact_force, f64::INFINITY),
             ("sync_window", self.sync_window, f64::INFINITY),
+            ("min_duration", self.min_duration, f64::INFINITY),
             ("min_cadence", self.min_cadence, f64::INFINITY),
             ("min_synchronous", self.min_synchronous, 1.0),
             ("min_alternation", self.min_alternation, 1.0),
@@ -488,6 +495,8 @@ pub struct GaitClassInput {
     pub step_count: usize,
     /// Steps per minute.
     pub cadence: f64,
+    /// Duration of the episode, s.
+    pub duration: f64,
     /// Share of touchdowns in two-footed landings.
     pub synchronous: Option<f64>,
     /// Share of successive beats that switch foot.
@@ -512,6 +521,7 @@ impl GaitClassInput {
             fell: false,
             step_count: phases.step_count,
             cadence: phases.cadence,
+            duration: phases.duration,
             synchronous: phases.synchronous,
             alternation: phases.alternation,
             double_support: phases.double_support,
@@ -533,7 +543,7 @@ impl GaitClassInput {
 /// assert_eq!(class, GaitClass::Hop);
 /// ```
 pub fn classify_gait(input: &GaitClassInput, t: &GaitThresholds) -> GaitClass {
-    if input.fell && input.step_count < t.min_touchdowns {
+    if input.fell && (input.step_count < t.min_touchdowns || input.duration < t.min_duration) {
         return GaitClass::Fall;
     }
     if input.step_count < t.min_touchdowns || input.cadence < t.min_cadence {

@@ -343,7 +343,7 @@ pub fn gait_classes_text(counts: &BTreeMap<GaitClass, usize>) -> String {
     if list.is_empty() {
         return "-".into();
     }
-    list.sort_by(|a, b| b.1.cmp(&a.1));
+    list.sort_by_key(|&(_, n)| std::cmp::Reverse(n));
     list.iter()
         .map(|(c, n)| format!("{c} {n}"))
         .collect::<Vec<_>>()

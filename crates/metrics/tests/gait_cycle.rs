@@ -147,6 +147,14 @@ fn falls_shuffles_and_slow_steps() {
         ..GaitClassInput::from_phases(&p)
     };
     assert_eq!(classify_gait(&fell, &t), GaitClass::Fall);
+    // … nor within 2 s: the same 9 touchdowns at 0.3 s per cycle last 1.5 s.
+    let p = gait_phases(&l, &r, 0.003, 0.015).unwrap();
+    assert_eq!(p.step_count, 9);
+    let mut fast = GaitClassInput::from_phases(&p);
+    assert!(close(fast.duration, 1.5));
+    assert_eq!(classify_gait(&fast, &t), GaitClass::Walk, "up: a walk");
+    fast.fell = true;
+    assert_eq!(classify_gait(&fast, &t), GaitClass::Fall);
     // One foot tapping while the other stays down: no alternation, no flight.
     let tap = foot(400, 20, 10, 0);
     assert_eq!(class_of(&vec![true; 400], &tap), GaitClass::Shuffle);
