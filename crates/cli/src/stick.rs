@@ -6,9 +6,9 @@
 //!
 //! - a cylinder → a `line` between the centres of its end faces, `[x0, z0, x1, z1]`;
 //! - a box → a `box` quadrilateral, the four corners `c ± a ± b` (`[x0, z0, …, x3, z3]`, in
-//!   order around it), where `a`, `b` are the two half-edge vectors whose x–z projections are
-//!   longest: the box's outline for a link turned about the y axis only (the sagittal joints
-//!   of the humanoid);
+//!   order around it), where `a`, `b` are the two half-edge vectors whose x–z projections
+//!   span the largest area: the box's outline for a link turned about the y axis only (the
+//!   sagittal joints of the humanoid);
 //! - a sphere → a `circle`, centre `[x, z]` with the part's `radius`.
 //!
 //! Frames are taken every `interval` seconds of simulated time (after the step that ends at a
@@ -170,8 +170,9 @@ fn project(link: &Pose, s: &ShapeRef) -> Vec<f32> {
         }
         Shape::Sphere { .. } => vec![mm(c[0]), mm(c[2])],
         Shape::Box { size } => {
-            // Half-edge vectors in the world, projected on x–z; keep the two longest.
-            let mut edges: Vec<[f64; 2]> = (0..3)
+            // Half-edge vectors in the world, projected on x–z; keep the pair that spans the
+            // largest area (for a box turned about y only, its x and z edges).
+            let edges: Vec<[f64; 2]> = (0..3)
                 .map(|k| {
                     let mut e = [0.0; 3];
                     e[k] = f64::from(size[k]) / 2.0;
@@ -179,8 +180,14 @@ fn project(link: &Pose, s: &ShapeRef) -> Vec<f32> {
                     [w[0] - c[0], w[2] - c[2]]
                 })
                 .collect();
-            edges.sort_by(|u, v| v[0].hypot(v[1]).total_cmp(&u[0].hypot(u[1])));
-            let (a, b) = (edges[0], edges[1]);
+            let area = |(i, j): (usize, usize)| {
+                (edges[i][0] * edges[j][1] - edges[i][1] * edges[j][0]).abs()
+            };
+            let (i, j) = [(0, 1), (0, 2), (1, 2)]
+                .into_iter()
+                .max_by(|&p, &q| area(p).total_cmp(&area(q)))
+                .unwrap_or((0, 2));
+            let (a, b) = (edges[i], edges[j]);
             [(1.0, 1.0), (1.0, -1.0), (-1.0, -1.0), (-1.0, 1.0)]
                 .iter()
                 .flat_map(|(sa, sb)| {

@@ -51,8 +51,11 @@
 //!    ground with both feet (flight at least [`GaitThresholds::min_flight`]). Alexander
 //!    1984: a hop has the feet in phase, a walk or run half a cycle apart.
 //! 4. **`shuffle`**: touchdowns that do not alternate without flight (one foot tapping or
-//!    sliding while the other stays down), or alternating steps shorter than
-//!    [`GaitThresholds::min_step_length`] on average (stepping in place, foot chatter).
+//!    sliding while the other stays down), or alternating steps that advance the feet less
+//!    than [`GaitThresholds::min_advance`] each: foot speed / step rate, the mean step length
+//!    of a steady gait (stepping in place, foot chatter). The advance is used rather than the
+//!    step length because a staggered landing (one foot 60 ms after the other) makes a short
+//!    step inside every long one.
 //! 5. **`run`**: alternating steps with flight (at least `min_flight` of the time), else
 //!    **`walk`**: alternating steps, flight ≈ 0, so the body is handed from foot to foot
 //!    in double support. A human walk has about 20 % double support and no flight (Perry &
@@ -113,11 +116,12 @@ pub struct GaitThresholds {
     /// walk has none; it leaves room for the odd sample in which a walking robot's feet both
     /// bounce off the ground.
     pub min_flight: f64,
-    /// `walk` and `run` need a mean step length of at least this, m. Default 0.1 (esrl's
+    /// `walk` and `run` need the feet to advance at least this per step (foot speed / step
+    /// rate), m; unknown without foot positions, then not checked. Default 0.1 (esrl's
     /// choice): a seventh of a normal adult step (about 0.7 m, half the 1.4 m stride of Perry
     /// & Burnfield 2010) and a ninth of the humanoid's leg length (0.94 m); shorter steps are
     /// stepping in place or foot chatter.
-    pub min_step_length: f64,
+    pub min_advance: f64,
     /// Feet whose net horizontal displacement over the episode, divided by its duration, is
     /// below this stand still; above, they slide (`shuffle`), m/s. Default 0.01 (0.6 m a
     /// minute, esrl's choice): below the 1.75 m a minute (0.03 m/s) that a limit-pressed
@@ -140,7 +144,7 @@ impl Default for GaitThresholds {
             min_synchronous: 0.5,
             min_alternation: 0.5,
             min_flight: 0.05,
-            min_step_length: 0.1,
+            min_advance: 0.1,
             still_speed: 0.01,
             limit_margin: 1f64.to_radians(),
         }
@@ -158,7 +162,7 @@ impl GaitThresholds {
             ("min_synchronous", self.min_synchronous, 1.0),
             ("min_alternation", self.min_alternation, 1.0),
             ("min_flight", self.min_flight, 1.0),
-            ("min_step_length", self.min_step_length, f64::INFINITY),
+            ("min_advance", self.min_advance, f64::INFINITY),
             ("still_speed", self.still_speed, f64::INFINITY),
             ("limit_margin", self.limit_margin, f64::INFINITY),
         ];
@@ -505,17 +509,14 @@ pub struct GaitClassInput {
     pub double_support: f64,
     /// Fraction of time with neither foot down.
     pub flight: f64,
-    /// Mean step length, m (`None`: unknown, the step-length rule is skipped).
-    #[serde(default)]
-    pub step_length_mean: Option<f64>,
     /// Mean over the feet of the net horizontal displacement / duration, m/s (`None`:
-    /// unknown, not stepping then reads as `stand`).
+    /// unknown: not stepping then reads as `stand`, and the advance per step is not checked).
     #[serde(default)]
     pub foot_speed: Option<f64>,
 }
 
 impl GaitClassInput {
-    /// The contact-based inputs of `phases`; `fell`, step length and foot speed unknown.
+    /// The contact-based inputs of `phases`; `fell` false, foot speed unknown.
     pub fn from_phases(phases: &GaitPhases) -> Self {
         Self {
             fell: false,
@@ -526,7 +527,6 @@ impl GaitClassInput {
             alternation: phases.alternation,
             double_support: phases.double_support,
             flight: phases.flight,
-            step_length_mean: None,
             foot_speed: None,
         }
     }
@@ -557,11 +557,11 @@ pub fn classify_gait(input: &GaitClassInput, t: &GaitThresholds) -> GaitClass {
     if input.synchronous.is_some_and(|s| s >= t.min_synchronous) || (!alternating && flight) {
         return GaitClass::Hop;
     }
-    if !alternating
-        || input
-            .step_length_mean
-            .is_some_and(|l| l < t.min_step_length)
-    {
+    let advance = input
+        .foot_speed
+        .filter(|_| input.cadence > 0.0)
+        .map(|v| v * 60.0 / input.cadence);
+    if !alternating || advance.is_some_and(|a| a < t.min_advance) {
         return GaitClass::Shuffle;
     }
     if flight {
@@ -625,7 +625,6 @@ impl GaitCycle {
         let (step_length_mean, step_length_sd) = mean_and_sd(steps);
         let input = GaitClassInput {
             fell,
-            step_length_mean,
             foot_speed,
             ..GaitClassInput::from_phases(phases)
         };

@@ -158,11 +158,12 @@ fn falls_shuffles_and_slow_steps() {
     // One foot tapping while the other stays down: no alternation, no flight.
     let tap = foot(400, 20, 10, 0);
     assert_eq!(class_of(&vec![true; 400], &tap), GaitClass::Shuffle);
-    // Alternating steps 5 cm long: stepping in place.
+    // Alternating steps (108 a minute, 1.8 a second) that advance the feet 0.09 m/s, 5 cm a
+    // step: stepping in place. At 0.9 m/s, 0.5 m a step: a walk.
     let mut input = GaitClassInput::from_phases(&gait_phases(&l, &r, DT, 0.05).unwrap());
-    input.step_length_mean = Some(0.05);
+    input.foot_speed = Some(0.09);
     assert_eq!(classify_gait(&input, &t), GaitClass::Shuffle);
-    input.step_length_mean = Some(0.5);
+    input.foot_speed = Some(0.9);
     assert_eq!(classify_gait(&input, &t), GaitClass::Walk);
     // The same walk at a tenth of the speed: 10.8 steps/min is below 60.
     let p = gait_phases(&l, &r, 10.0 * DT, 0.05).unwrap();
