@@ -82,8 +82,9 @@ pub struct GaitThresholds {
     /// A foot is in contact when its ground normal force exceeds this, N. Default 10: force
     /// plates detect toe-off reliably only at 10 N or less (Tirosh & Sparrow 2003,
     /// "Identifying heel contact and toe-off using forceplate thresholds with a range of
-    /// digital-filter cutoff frequencies", J Appl Biomech 19:178–184); Fellin et al. 2010
-    /// (Gait & Posture 33:130–132) use 10 N too. About 1.5 % of the humanoid's weight.
+    /// digital-filter cutoff frequencies", J Appl Biomech 19:178–184), and 10 N is the cut-off
+    /// of "Identifying gait events without a force plate during running: a comparison of
+    /// methods" (Gait & Posture 33:130–132, 2011). About 1.5 % of the humanoid's weight.
     pub contact_force: f64,
     /// Touchdowns of opposite feet at most this far apart form one landing, s. Default 0.05
     /// (two control periods): a quarter of the shortest human step time (about 0.2 s when
@@ -98,9 +99,10 @@ pub struct GaitThresholds {
     /// strides of normal human walking (stride time about 1 s: Perry & Burnfield 2010).
     pub min_duration: f64,
     /// Below this cadence the robot is not stepping (`stand` or `shuffle`), steps/min.
-    /// Default 60: the slowest cadence band that free-living adults walk in (60–79
-    /// steps/min; below 60 is incidental movement: Tudor-Locke et al. 2011, "Patterns of
-    /// adult stepping cadence in the 2005–2006 NHANES", Prev Med 53:178–181).
+    /// Default 60: the lower edge of the cadence bands in which free-living adults do their
+    /// walking (60–79 steps/min and up; below 60 they accumulate hours of sporadic,
+    /// non-walking steps: Tudor-Locke et al. 2011, "Patterns of adult stepping cadence in
+    /// the 2005–2006 NHANES", Prev Med 53:178–181).
     pub min_cadence: f64,
     /// `hop` when at least this share of the touchdowns is simultaneous. Default 0.5 (most
     /// landings two-footed).
@@ -111,10 +113,10 @@ pub struct GaitThresholds {
     pub min_alternation: f64,
     /// Flight (both feet off the ground) of at least this fraction of the time makes an
     /// alternating gait a `run` and a non-alternating one a `hop`. Default 0.05 (esrl's
-    /// choice): under half of the flight of slow human running (stance ends at about 39 % of
-    /// the cycle, leaving two float phases of about 11 % each: Novacheck 1998), while a
-    /// walk has none; it leaves room for the odd sample in which a walking robot's feet both
-    /// bounce off the ground.
+    /// choice): a walk has no flight, while in running each foot is down for less than half
+    /// of the cycle and two float phases take up a sizeable part of it, growing with speed
+    /// (Novacheck 1998); 5 % leaves room for the odd sample in which a walking robot's feet
+    /// both bounce off the ground.
     pub min_flight: f64,
     /// `walk` and `run` need the feet to advance at least this per step (foot speed / step
     /// rate), m; unknown without foot positions, then not checked. Default 0.1 (esrl's

@@ -7,7 +7,8 @@
   (each stride of a foot, from its touchdown to its next, rescaled to 0–100 %), with the joint
   limits;
 - :func:`stick_filmstrip`: the robot's side view (every collision primitive projected on the
-  x–z plane) every ``interval`` seconds, one panel per frame, following the robot;
+  x–z plane) every ``interval`` seconds (default 0.3), one panel per frame, following the
+  robot;
 - :func:`stick_animation`: the side view as an animated GIF (needs Pillow, which matplotlib
   depends on).
 
@@ -105,30 +106,37 @@ def _cycle_text(ep: Dict[str, Any]) -> str:
     return ", ".join(parts)
 
 
-def gait_diagram(ep: Dict[str, Any], ax: Any = None, window: Optional[float] = 10.0) -> Any:
-    """Left/right contact bars over the first ``window`` seconds (all of it for ``None``);
-    flight (no foot down) shaded. Returns the figure."""
+def _span(n: int, dt: float, window: Optional[float], start: float) -> Tuple[int, int]:
+    """Sample range [i0, i1) of the time window ``start`` .. ``start + window``."""
+    i0 = min(max(0, int(round(start / dt))), n - 1)
+    i1 = n if window is None else min(n, i0 + max(1, int(round(window / dt))))
+    return i0, i1
+
+
+def gait_diagram(ep: Dict[str, Any], ax: Any = None, window: Optional[float] = 10.0,
+                 start: float = 0.0) -> Any:
+    """Left/right contact bars over ``window`` seconds from ``start`` (all of it for
+    ``window=None``); flight (no foot down) shaded. Returns the figure."""
     from matplotlib.figure import Figure
 
     trace = ep["trace"]
     contact = _contact(trace)
     dt = _dt(trace)
-    n = len(contact)
-    shown = n if window is None else min(n, max(1, int(round(window / dt))))
+    i0, i1 = _span(len(contact), dt, window, start)
     fig = None
     if ax is None:
         fig = Figure(figsize=(10, 2.8), layout="constrained")
         ax = fig.add_subplot()
     # Sample i is the state after step i + 1, held over ((i)·dt, (i + 1)·dt].
     for row, (side, col) in enumerate((("left", 0), ("right", 1))):
-        bars = [(a * dt, k * dt) for a, k in _runs(contact[:shown, col])]
+        bars = [((i0 + a) * dt, k * dt) for a, k in _runs(contact[i0:i1, col])]
         ax.broken_barh(bars, (1 - row - 0.35, 0.7), facecolors=SIDE_COLORS[side])
-    flight = [(a * dt, k * dt) for a, k in _runs(~contact[:shown].any(axis=1))]
+    flight = [((i0 + a) * dt, k * dt) for a, k in _runs(~contact[i0:i1].any(axis=1))]
     ax.broken_barh(flight, (-0.5, 2.0), facecolors="0.85", zorder=0, label="flight")
     ax.set_yticks([1, 0])
     ax.set_yticklabels(["left", "right"])
     ax.set_ylim(-0.5, 1.5)
-    ax.set_xlim(0, shown * dt)
+    ax.set_xlim(i0 * dt, i1 * dt)
     ax.set_xlabel("time since reset (s)")
     ends = " (fell)" if (ep.get("gait") or {}).get("fell") else ""
     ax.set_title(f"Gait diagram: {ep.get('label', '')}{ends}\n{_cycle_text(ep)}", fontsize=9)
@@ -147,10 +155,12 @@ def _joint_rows(names: Sequence[str]) -> List[Tuple[str, Dict[str, int]]]:
     return list(rows.items())
 
 
-def joint_angle_cycles(ep: Dict[str, Any], window: Optional[float] = 10.0) -> Any:
-    """Per joint kind (hip, knee, ankle): the angle over the first ``window`` seconds (left),
-    and over the gait cycle of its own foot, every stride thin and their mean thick (right);
-    dashed lines at the joint limits. Returns the figure."""
+def joint_angle_cycles(ep: Dict[str, Any], window: Optional[float] = 10.0,
+                       start: float = 0.0, thin: int = 20) -> Any:
+    """Per joint kind (hip, knee, ankle): the angle over ``window`` seconds from ``start``
+    (left), and over the gait cycle of its own foot (right): the mean over every stride of
+    the episode thick, the first ``thin`` strides from ``start`` on thin; dashed lines at the
+    joint limits. Returns the figure."""
     from matplotlib.figure import Figure
 
     trace = ep["trace"]
@@ -164,8 +174,7 @@ def joint_angle_cycles(ep: Dict[str, Any], window: Optional[float] = 10.0) -> An
     # Touchdown sample indices per side (time = (i + 1)·dt).
     downs = {side: np.rint(np.asarray(phases["touchdown_times"][k]) / dt).astype(int) - 1
              for k, side in enumerate(("left", "right"))}
-    n = len(t)
-    shown = n if window is None else min(n, max(1, int(round(window / dt))))
+    i0, i1 = _span(len(t), dt, window, start)
     rows = _joint_rows(names)
     fig = Figure(figsize=(11, 2.4 * len(rows) + 0.6), layout="constrained")
     axes = np.asarray(fig.subplots(len(rows), 2, squeeze=False))
@@ -174,15 +183,18 @@ def joint_angle_cycles(ep: Dict[str, Any], window: Optional[float] = 10.0) -> An
         strides_drawn = False
         for side, j in sides.items():
             color = SIDE_COLORS.get(side, _BODY)
-            ax_t.plot(t[:shown], q[:shown, j], color=color, lw=1.1, label=side)
+            ax_t.plot(t[i0:i1], q[i0:i1, j], color=color, lw=1.1, label=side)
             d = downs.get(side, np.array([], dtype=int))
             curves = []
+            drawn = 0
             for a, b in zip(d[:-1], d[1:]):
                 if b - a < 2:
                     continue
                 x = np.linspace(0.0, 100.0, b - a + 1)
                 curves.append(np.interp(grid, x, q[a:b + 1, j]))
-                ax_c.plot(grid, curves[-1], color=color, lw=0.5, alpha=0.3)
+                if a >= i0 and drawn < thin:
+                    ax_c.plot(grid, curves[-1], color=color, lw=0.5, alpha=0.3)
+                    drawn += 1
             if curves:
                 ax_c.plot(grid, np.mean(curves, axis=0), color=color, lw=2.0,
                           label=f"{side} (mean of {len(curves)} strides)")
@@ -254,20 +266,22 @@ def _stick(ep: Dict[str, Any]) -> Dict[str, Any]:
     return stick
 
 
-def stick_filmstrip(ep: Dict[str, Any], interval: float = 0.25, frames: int = 12,
+def stick_filmstrip(ep: Dict[str, Any], interval: float = 0.3, frames: int = 12,
                     start: float = 0.0) -> Any:
-    """The side view every ``interval`` seconds (0.2–0.5 s reads well) from ``start``,
-    ``frames`` panels, each centred on the robot with the same scale (1 m grid). Returns the
-    figure."""
+    """The side view every ``interval`` seconds (0.2–0.5 s reads well; rounded to a multiple
+    of the trace's 0.1 s frames) from ``start``, ``frames`` panels, each centred on the robot
+    with the same scale (1 m grid). Returns the figure."""
     from matplotlib.figure import Figure
 
     stick = _stick(ep)
     times = np.asarray(stick["time"], dtype=float)
+    step = float(stick["interval"])
+    interval = step * max(1, int(np.floor(interval / step + 0.5)))
     wanted = start + interval * np.arange(max(1, frames))
     picks: List[int] = []
     for w in wanted:
         k = int(np.argmin(np.abs(times - w)))
-        if abs(times[k] - w) <= 0.51 * float(stick["interval"]) and k not in picks:
+        if abs(times[k] - w) <= 0.51 * step and k not in picks:
             picks.append(k)
     if not picks:
         picks = [0]
@@ -294,20 +308,24 @@ def stick_filmstrip(ep: Dict[str, Any], interval: float = 0.25, frames: int = 12
 
 
 def stick_animation(ep: Dict[str, Any], path: PathLike, seconds: Optional[float] = 10.0,
-                    dpi: int = 80) -> Path:
-    """Writes the side view as an animated GIF at the trace's frame rate (real time), the
-    first ``seconds`` (all for ``None``), the camera following the robot. Returns the path."""
+                    dpi: int = 80, start: float = 0.0) -> Path:
+    """Writes the side view as an animated GIF at the trace's frame rate (real time),
+    ``seconds`` from ``start`` (to the end for ``None``), the camera following the robot.
+    Returns the path."""
     from matplotlib.animation import FuncAnimation, PillowWriter
     from matplotlib.figure import Figure
 
     stick = _stick(ep)
     times = np.asarray(stick["time"], dtype=float)
-    count = len(times) if seconds is None else int(np.sum(times <= seconds + 1e-9))
-    count = max(1, count)
+    end = np.inf if seconds is None else start + seconds + 1e-9
+    shown = np.flatnonzero((times >= start - 1e-9) & (times <= end))
+    if shown.size == 0:
+        shown = np.array([0])
     fig = Figure(figsize=(4.0, 3.2))
     ax = fig.add_subplot()
 
-    def draw(k: int) -> List[Any]:
+    def draw(i: int) -> List[Any]:
+        k = int(shown[i])
         ax.clear()
         lo, hi = _draw_stick(ax, stick["parts"], stick["frames"][k])
         centre = 0.5 * (lo + hi)
@@ -319,7 +337,7 @@ def stick_animation(ep: Dict[str, Any], path: PathLike, seconds: Optional[float]
         ax.tick_params(labelsize=7)
         return []
 
-    anim = FuncAnimation(fig, draw, frames=count, blit=False)
+    anim = FuncAnimation(fig, draw, frames=len(shown), blit=False)
     out = Path(path)
     fps = max(1, int(round(1.0 / float(stick["interval"]))))
     anim.save(os.fspath(out), writer=PillowWriter(fps=fps), dpi=dpi)
@@ -328,20 +346,22 @@ def stick_animation(ep: Dict[str, Any], path: PathLike, seconds: Optional[float]
 
 def render_gait(source: Union[PathLike, Dict[str, Any]], out: PathLike, episode: int = 0,
                 dpi: int = 120, gif: bool = False, window: Optional[float] = 10.0,
-                interval: float = 0.25, frames: int = 12, start: float = 0.0) -> List[Path]:
+                interval: float = 0.3, frames: int = 12, start: float = 0.0) -> List[Path]:
     """Writes :data:`esrl_rs.report.GAIT_FIGURES` (and ``stick.gif`` with ``gif``) for episode
     ``episode`` of a run folder, ``RUN/best``, an ``eval.json`` or a loaded eval dict into
-    ``out`` (created if needed). Returns the files written."""
+    ``out`` (created if needed): the gait diagram and the joint angles over ``window`` seconds
+    from ``start``, the filmstrip's ``frames`` every ``interval`` seconds from ``start``.
+    Returns the files written."""
     ep = load_episode(source, episode)
     out_dir = Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
-    for name, fig in (("gait_diagram.png", gait_diagram(ep, window=window)),
-                      ("joint_angles.png", joint_angle_cycles(ep, window=window)),
+    for name, fig in (("gait_diagram.png", gait_diagram(ep, window=window, start=start)),
+                      ("joint_angles.png", joint_angle_cycles(ep, window=window, start=start)),
                       ("stick_filmstrip.png", stick_filmstrip(ep, interval, frames, start))):
         path = out_dir / name
         fig.savefig(path, dpi=dpi)
         written.append(path)
     if gif:
-        written.append(stick_animation(ep, out_dir / "stick.gif"))
+        written.append(stick_animation(ep, out_dir / "stick.gif", start=start))
     return written

@@ -18,7 +18,7 @@ Runs are grouped by agent (``config.toml`` key ``agent``). Writes to ``DIR``:
   (:func:`render_gait`, episode ``--episode``, default 0): ``gait_diagram.png`` (left/right
   foot contact over time, as in biomechanics papers), ``joint_angles.png`` (hip, knee and
   ankle angles over time and over the gait cycle, with the joint limits),
-  ``stick_filmstrip.png`` (the robot's side view every 0.25 s) and, with ``--gif``,
+  ``stick_filmstrip.png`` (the robot's side view every 0.3 s) and, with ``--gif``,
   ``stick.gif`` (the side view animated in real time).
 
 A panel without data is left out with a note (printed, and listed in ``table1.md``). The
@@ -294,7 +294,7 @@ def _gait_dir_name(run: Run, taken: Sequence[str]) -> str:
 
 def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
                   out: Union[str, "os.PathLike[str]"], dpi: int = 150, gait: bool = True,
-                  episode: int = 0, gif: bool = False) -> Report:
+                  episode: int = 0, gif: bool = False, start: float = 0.0) -> Report:
     """Renders Fig. 5 (a–d) and Table 1 for ``run_dirs`` into ``out`` (created if needed),
     and with ``gait`` the gait pictures (:func:`render_gait`) of episode ``episode`` of every
     run whose ``eval.json`` has the per-step trace into ``out/gait/<agent>-s<seed>/``. Raises
@@ -376,7 +376,7 @@ def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
                 name = _gait_dir_name(r, taken)
                 taken.append(name)
                 report.files += render_gait(r.eval, out_dir / "gait" / name, episode=episode,
-                                            dpi=min(dpi, 120), gif=gif)
+                                            dpi=min(dpi, 120), gif=gif, start=start)
         if report.notes and table_md.is_file():
             text = table_md.read_text(encoding="utf-8")
             if "## Notes" not in text:
@@ -404,13 +404,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="evaluation episode of the gait pictures (default 0)")
     parser.add_argument("--gif", action="store_true",
                         help="also an animated side view, stick.gif (first 10 s)")
+    parser.add_argument("--start", type=float, default=0.0, metavar="S",
+                        help="gait pictures from this time (s) of the episode (default 0)")
     args = parser.parse_args(argv)
     if not args.runs and not args.gait:
         parser.error("give run folders or --gait PATH")
     try:
         if args.runs:
             report = render_report(args.runs, args.out, dpi=args.dpi, episode=args.episode,
-                                   gif=args.gif)
+                                   gif=args.gif, start=args.start)
         else:
             report = Report(out=Path(args.out))
         for path in args.gait:
@@ -419,7 +421,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 p.parent.name if p.is_file() else p.name)
             report.files += render_gait(p, Path(args.out) / "gait" / name,
                                         episode=args.episode, dpi=min(args.dpi, 120),
-                                        gif=args.gif)
+                                        gif=args.gif, start=args.start)
     except (EsrlError, OSError, ValueError, KeyError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
