@@ -1,4 +1,4 @@
-//! `esrl_rs.metrics`: the learning-curve, gait and Table 1 functions of `esrl-metrics` on
+//! `esrl_rs.metrics`: the learning-curve, gait, gait-cycle and Table 1 functions of `esrl-metrics` on
 //! NumPy arrays (SPEC §6). Every function is a direct call into the Rust crate; errors arrive as
 //! `ValueError` with the crate's message.
 
@@ -140,24 +140,147 @@ pub fn mean_sd<'py>(py: Python<'py>, values: Curve<'py>) -> PyResult<Bound<'py, 
     to_py(py, &s)
 }
 
+/// The thresholds of the gait-cycle metrics: the defaults updated with `overrides` (a dict
+/// with some of the keys of `esrl_metrics::GaitThresholds`; unknown keys are refused).
+fn thresholds(overrides: Option<&Bound<'_, PyAny>>) -> PyResult<m::GaitThresholds> {
+    let t: m::GaitThresholds = match overrides {
+        Some(o) if !o.is_none() => from_py(o, "thresholds")?,
+        _ => m::GaitThresholds::default(),
+    };
+    t.validate().map_err(metrics_error)?;
+    Ok(t)
+}
+
 /// Gait metrics of one rollout from a trace dict (the fields of `esrl_metrics::GaitTrace`).
 #[pyfunction]
-#[pyo3(signature = (trace, track_length = 50.0, left_knee = "left_knee", right_knee = "right_knee"))]
+#[pyo3(signature = (trace, track_length = 50.0, left_knee = "left_knee", right_knee = "right_knee", thresholds = None))]
 pub fn gait_metrics<'py>(
     py: Python<'py>,
     trace: &Bound<'py, PyAny>,
     track_length: f64,
     left_knee: &str,
     right_knee: &str,
+    thresholds: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let trace: m::GaitTrace = from_py(trace, "trace")?;
     let options = m::GaitOptions {
         track_length,
         left_knee: left_knee.into(),
         right_knee: right_knee.into(),
+        thresholds: self::thresholds(thresholds)?,
     };
     let g = m::gait_metrics(&trace, &options).map_err(metrics_error)?;
     to_py(py, &g)
+}
+
+/// The default gait thresholds as a dict (keys of `esrl_metrics::GaitThresholds`).
+#[pyfunction]
+pub fn gait_thresholds<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    to_py(py, &m::GaitThresholds::default())
+}
+
+/// Contact flags from a 1-D array of booleans or 0/1 numbers; `what` names it in errors.
+fn contact_flags(values: &Curve<'_>, what: &str) -> PyResult<Vec<bool>> {
+    values
+        .as_array()
+        .iter()
+        .enumerate()
+        .map(|(i, &v)| {
+            if v == 0.0 {
+                Ok(false)
+            } else if v == 1.0 {
+                Ok(true)
+            } else {
+                Err(value_error(format!(
+                    "{what}[{i}] = {v}: contact flags must be booleans or 0/1 (threshold a force \
+                     first, e.g. force > 10)"
+                )))
+            }
+        })
+        .collect()
+}
+
+/// Support phases, touchdowns, alternation, cadence and stride times of two contact traces.
+#[pyfunction]
+#[pyo3(signature = (left_contact, right_contact, dt, sync_window = None))]
+pub fn gait_phases<'py>(
+    py: Python<'py>,
+    left_contact: Curve<'py>,
+    right_contact: Curve<'py>,
+    dt: f64,
+    sync_window: Option<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let left = contact_flags(&left_contact, "left_contact")?;
+    let right = contact_flags(&right_contact, "right_contact")?;
+    let window = sync_window.unwrap_or(m::GaitThresholds::default().sync_window);
+    let p = m::gait_phases(&left, &right, dt, window).map_err(metrics_error)?;
+    to_py(py, &p)
+}
+
+/// Step lengths from two contact traces and each foot's forward position (samples × 2).
+#[pyfunction]
+#[pyo3(signature = (left_contact, right_contact, foot_x, dt, sync_window = None))]
+pub fn step_lengths<'py>(
+    py: Python<'py>,
+    left_contact: Curve<'py>,
+    right_contact: Curve<'py>,
+    foot_x: &Bound<'py, PyAny>,
+    dt: f64,
+    sync_window: Option<f64>,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let left = contact_flags(&left_contact, "left_contact")?;
+    let right = contact_flags(&right_contact, "right_contact")?;
+    let rows = curves_to_vecs(foot_x)?;
+    let x = rows
+        .iter()
+        .enumerate()
+        .map(|(i, r)| match r.as_slice() {
+            [l, r] => Ok([*l, *r]),
+            _ => Err(value_error(format!(
+                "foot_x[{i}]: {} values, expected 2 (left x, right x)",
+                r.len()
+            ))),
+        })
+        .collect::<PyResult<Vec<[f64; 2]>>>()?;
+    let window = sync_window.unwrap_or(m::GaitThresholds::default().sync_window);
+    let steps = m::step_lengths(&left, &right, &x, dt, window).map_err(metrics_error)?;
+    Ok(PyArray1::from_vec(py, steps))
+}
+
+/// The gait class (`"walk"`, `"run"`, `"hop"`, `"shuffle"`, `"stand"`, `"fall"`) of the inputs
+/// of `esrl_metrics::GaitClassInput` (a `gait_phases` dict plus `fell`, `step_length_mean`,
+/// `foot_speed`).
+#[pyfunction]
+#[pyo3(signature = (inputs, thresholds = None))]
+pub fn classify_gait(
+    inputs: &Bound<'_, PyAny>,
+    thresholds: Option<&Bound<'_, PyAny>>,
+) -> PyResult<String> {
+    let input: m::GaitClassInput = from_py(inputs, "inputs")?;
+    let t = self::thresholds(thresholds)?;
+    Ok(m::classify_gait(&input, &t).name().to_string())
+}
+
+/// Range of motion (5th–95th percentile) and time within `margin` of a limit of one joint.
+#[pyfunction]
+#[pyo3(signature = (name, angles, limits = None, margin = None))]
+pub fn joint_motion<'py>(
+    py: Python<'py>,
+    name: &str,
+    angles: Curve<'py>,
+    limits: Option<(f64, f64)>,
+    margin: Option<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let margin = margin.unwrap_or(m::GaitThresholds::default().limit_margin);
+    let j = m::joint_motion(name, &to_vec(&angles), limits.map(|(a, b)| [a, b]), margin)
+        .map_err(metrics_error)?;
+    to_py(py, &j)
+}
+
+/// The `p`-quantile (`p` in [0, 1]) with linear interpolation (NumPy's default).
+#[pyfunction]
+pub fn percentile(values: Curve<'_>, p: f64) -> PyResult<f64> {
+    m::percentile(&to_vec(&values), p).map_err(metrics_error)
 }
 
 fn table_rows(agents: &Bound<'_, PyAny>) -> PyResult<Vec<m::Table1Row>> {
@@ -190,6 +313,12 @@ pub fn actuator_markdown(agents: &Bound<'_, PyAny>) -> PyResult<String> {
     Ok(m::actuator_markdown(&table_rows(agents)?))
 }
 
+/// Range of motion and time at a limit per joint as Markdown (same input as `table1`).
+#[pyfunction]
+pub fn joint_markdown(agents: &Bound<'_, PyAny>) -> PyResult<String> {
+    Ok(m::joint_markdown(&table_rows(agents)?))
+}
+
 /// The number format of Table 1 cells.
 #[pyfunction]
 pub fn format_number(x: f64) -> String {
@@ -214,6 +343,13 @@ pub fn register(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add_function(wrap_pyfunction!(summarize_method, module)?)?;
     module.add_function(wrap_pyfunction!(mean_sd, module)?)?;
     module.add_function(wrap_pyfunction!(gait_metrics, module)?)?;
+    module.add_function(wrap_pyfunction!(gait_thresholds, module)?)?;
+    module.add_function(wrap_pyfunction!(gait_phases, module)?)?;
+    module.add_function(wrap_pyfunction!(step_lengths, module)?)?;
+    module.add_function(wrap_pyfunction!(classify_gait, module)?)?;
+    module.add_function(wrap_pyfunction!(joint_motion, module)?)?;
+    module.add_function(wrap_pyfunction!(percentile, module)?)?;
+    module.add_function(wrap_pyfunction!(joint_markdown, module)?)?;
     module.add_function(wrap_pyfunction!(table1, module)?)?;
     module.add_function(wrap_pyfunction!(table1_markdown, module)?)?;
     module.add_function(wrap_pyfunction!(table1_csv, module)?)?;

@@ -137,13 +137,32 @@ def gait(power_scale: float, fell: bool = False) -> Dict[str, Any]:
     }
 
 
+def stick(times: List[float], x0: float) -> Dict[str, Any]:
+    """A side view in `esrl eval`'s format: a leg (line), a foot (box), a head (circle)."""
+    parts = [{"link": "left_shank", "kind": "line", "radius": 0.045},
+             {"link": "right_foot", "kind": "box", "radius": 0.0},
+             {"link": "torso", "kind": "circle", "radius": 0.1}]
+    frames = []
+    for t in times:
+        x = x0 + t
+        frames.append([[x, 0.5, x, 0.1], [x, 0.0, x + 0.2, 0.0, x + 0.2, 0.05, x, 0.05],
+                       [x, 1.6]])
+    return {"interval": 0.1, "parts": parts, "time": times, "frames": frames}
+
+
 def episode(seed: int, power_scale: float) -> Dict[str, Any]:
     t = [0.025 * (k + 1) for k in range(40)]
+    # Alternating feet, 0.5 s cycle: left down 0..11, right 10..21 (mod 20).
+    contact = [[int(k % 20 < 12), int((k + 10) % 20 < 12)] for k in range(40)]
+    angles = [[0.1 * math.sin(k / 3 + j) for j in range(6)] for k in range(40)]
     return {
         "seed": seed, "return": 123.5, "gait": gait(power_scale),
         "trace": {"time": t, "x": [1.25 * v * power_scale for v in t],
                   "y": [0.05 * math.sin(3 * v) for v in t],
-                  "z_error": [-0.01] * 40, "forward_velocity": [1.25 * power_scale] * 40},
+                  "z_error": [-0.01] * 40, "forward_velocity": [1.25 * power_scale] * 40,
+                  "contact": contact, "joint_names": ACTUATORS,
+                  "joint_limits": [[-1.5708, 0.5236], [0.0873, 1.5708], [-0.349, 0.349]] * 2,
+                  "joint_angle": angles, "stick": stick([0.1 * k for k in range(1, 11)], 0.0)},
         "extra_key": {"kept": True},
     }
 

@@ -15,6 +15,7 @@ from esrl_rs import report
 PNG = b"\x89PNG\r\n\x1a\n"
 ALL_PANELS = ["fig5.png", "fig5a_learning_curves.png", "fig5b_q0.png",
               "fig5c_lateral_deviation.png", "fig5d_power_per_actuator.png"]
+GAIT_PNGS = ["gait_diagram.png", "joint_angles.png", "stick_filmstrip.png"]
 
 
 def _files(out: Path) -> List[str]:
@@ -30,9 +31,14 @@ def _check_pngs(out: Path, names: List[str]) -> None:
 def test_report_from_evaluated_runs(synthetic_runs: List[Path], tmp_path: Path) -> None:
     out = tmp_path / "report"
     r = report.render_report(synthetic_runs, out, dpi=60)
-    assert _files(out) == sorted(ALL_PANELS + ["table1.csv", "table1.md"])
+    assert _files(out) == sorted(ALL_PANELS + ["gait", "table1.csv", "table1.md"])
     assert r.notes == []
     _check_pngs(out, ALL_PANELS)
+    # One gait folder per evaluated run, named agent-s<seed>.
+    assert _files(out / "gait") == ["es-sac-s0", "es-sac-s1", "sac-s0", "sac-s1"]
+    for run in ("es-sac-s0", "sac-s1"):
+        assert _files(out / "gait" / run) == GAIT_PNGS
+        _check_pngs(out / "gait" / run, GAIT_PNGS)
     md = (out / "table1.md").read_text(encoding="utf-8")
     # paper order: ES-SAC before SAC; both with 2 seeds
     assert md.index("| es-sac | 2 |") < md.index("| sac | 2 |")
@@ -88,12 +94,42 @@ def test_report_from_two_evaluated_cli_runs(cli_train: Callable[..., Path],
         cli_eval(run, 2)
         runs.append(run)
     out = tmp_path / "walk-report"
-    r = report.render_report(runs, out, dpi=60)
+    r = report.render_report(runs, out, dpi=60, episode=1)
     assert r.notes == []
-    assert _files(out) == sorted(ALL_PANELS + ["table1.csv", "table1.md"])
+    assert _files(out) == sorted(ALL_PANELS + ["gait", "table1.csv", "table1.md"])
     _check_pngs(out, ALL_PANELS)
     md = (out / "table1.md").read_text(encoding="utf-8")
     assert "| es-sac | 2 |" in md and "left_knee" in md
+    assert "Gait (episodes)" in md and "left_knee ROM (°)" in md
+    # Every new figure, from the smoke runs' own eval.json.
+    for seed in ("0", "1"):
+        folder = out / "gait" / f"es-sac-s{seed}"
+        assert _files(folder) == GAIT_PNGS
+        _check_pngs(folder, GAIT_PNGS)
+
+
+def test_gait_pictures_of_one_run(cli_train: Callable[..., Path],
+                                  cli_eval: Callable[..., dict], tmp_path: Path) -> None:
+    import shutil
+    from esrl_rs import gait
+    run = shutil.copytree(cli_train("es-sac", "--preset", "smoke", "--seed", "0"),
+                          tmp_path / "one")
+    ev = cli_eval(run, 1)
+    trace = ev["episodes"][0]["trace"]
+    assert len(trace["contact"]) == len(trace["time"]) == len(trace["joint_angle"])
+    files = gait.render_gait(run, tmp_path / "pics", dpi=60, gif=True)
+    assert [f.name for f in files] == GAIT_PNGS + ["stick.gif"]
+    _check_pngs(tmp_path / "pics", GAIT_PNGS)
+    assert (tmp_path / "pics" / "stick.gif").read_bytes()[:6] in (b"GIF89a", b"GIF87a")
+    # The command line takes a single policy with --gait (here the run folder).
+    out = tmp_path / "cli"
+    proc = subprocess.run([sys.executable, "-m", "esrl_rs.report", "--gait", str(run),
+                           "--out", str(out), "--dpi", "60"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert _files(out / "gait" / "one") == GAIT_PNGS
+    with pytest.raises(ValueError, match="episode 3 not in eval.json"):
+        gait.render_gait(run, tmp_path / "none", episode=3)
 
 
 def test_report_bad_path(tmp_path: Path) -> None:

@@ -4,7 +4,8 @@
 //! ```text
 //! DIR/
 //!   <agent>-s<seed>/   one run folder per agent and seed (see run_dir), plus its eval.json
-//!   table.md           Table 1 and the per-actuator torque/power table (paper Fig. 5d)
+//!   table.md           Table 1, the per-actuator torque/power table (paper Fig. 5d) and the
+//!                      per-joint range of motion / time at a limit
 //!   table.csv          Table 1 for machines (mean, SD and count per metric)
 //! ```
 //!
@@ -40,7 +41,8 @@ use crate::run_dir::{write_atomic, RunDir};
 use anyhow::{bail, Context, Result};
 use clap::ValueEnum;
 use esrl_metrics::{
-    actuator_markdown, summarize_method, table1, table1_csv, table1_markdown, AgentRuns, SeedResult,
+    actuator_markdown, joint_markdown, summarize_method, table1, table1_csv, table1_markdown,
+    AgentRuns, SeedResult,
 };
 use serde_json::Value;
 use std::collections::VecDeque;
@@ -386,7 +388,7 @@ pub fn read_curve(dir: &Path) -> Result<(Vec<f64>, Option<f64>)> {
 }
 
 /// The run's `eval.json` if it covers `episodes` episodes from seed 0 of its current
-/// checkpoint; else evaluates and writes it.
+/// checkpoint and has the gait-cycle metrics; else evaluates and writes it.
 fn evaluation(dir: &Path, episodes: usize) -> Result<EvalReport> {
     let p = dir.join(EVAL_FILE);
     let mtime = |p: &Path| fs::metadata(p).and_then(|m| m.modified()).ok();
@@ -396,7 +398,10 @@ fn evaluation(dir: &Path, episodes: usize) -> Result<EvalReport> {
                 (Some(e), Some(c)) => e >= c,
                 _ => false,
             };
+            // An eval.json written before the gait-cycle metrics existed lacks them.
+            let has_cycle = r.mean.gait.as_ref().is_none_or(|g| g.cycle.is_some());
             if fresh
+                && has_cycle
                 && r.seed == 0
                 && r.episodes.len() == episodes
                 && Path::new(&r.checkpoint) == ckpt
@@ -583,7 +588,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         let rows = table1(&table_agents).context("building Table 1")?;
         let table = table1_markdown(&rows);
         let actuators = actuator_markdown(&rows);
+        let joints = joint_markdown(&rows);
         let has_gait = rows.iter().any(|r| r.gait_runs > 0);
+        let has_joints = rows.iter().any(|r| !r.joint_names.is_empty());
         let preset = args
             .opts
             .preset
@@ -604,11 +611,23 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             md.push_str("\n## Mean |torque| and |power| per actuator\n\n");
             md.push_str(&actuators);
         }
+        if has_joints {
+            md.push_str(
+                "\n## Range of motion (5th–95th percentile) and time within 1° of a limit per \
+                 joint\n\n",
+            );
+            md.push_str(&joints);
+        }
         md.push_str(&format!(
             "\nMean ± sample SD across seeds. Episodes-to-Target: first generation/episode whose \
              trailing 50-value mean reaches 80% of the agent's median Best-Win-50. Gait columns: \
              mean of {} deterministic evaluation episode(s) per run (seeds 0, 1, …); a run counts \
-             as finishing the track only if every episode did, and as falling if any did.\n",
+             as finishing the track only if every episode did, and as falling if any did. Gait: \
+             the evaluation episodes of all seeds per gait class (rules and thresholds: \
+             `esrl_metrics::GaitThresholds`); Double Support, Flight: fractions of the time; \
+             Alternation: share of successive touchdowns that switch foot; Stride CV: \
+             stride-time SD / mean; At Limit: share of the time the actuated joints spend \
+             within 1° of a limit.\n",
             args.eval_episodes
         ));
         if let Some(note) = &budget_note {

@@ -10,6 +10,7 @@ pub mod eval;
 pub mod record;
 pub mod run_dir;
 pub mod signals;
+pub mod stick;
 pub mod train;
 
 /// An error and its causes on one line, `outer: inner: …`, leaving out a cause whose text

@@ -85,12 +85,13 @@ fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
 
     let md = std::fs::read_to_string(dir.join("table.md")).unwrap();
     let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| ")).collect();
-    // Table 1 (header + 2 agents) and the actuator table (header + 2 agents).
+    // Table 1, the actuator table and the joint table: one row per agent each.
     assert_eq!(
         rows.iter().filter(|l| l.starts_with("| es-sac |")).count(),
-        2
+        3
     );
-    assert_eq!(rows.iter().filter(|l| l.starts_with("| sac |")).count(), 2);
+    assert_eq!(rows.iter().filter(|l| l.starts_with("| sac |")).count(), 3);
+    assert!(md.contains("left_knee ROM (°)"), "{md}");
     assert!(md.contains("Best-Win-50") && md.contains("Episodes-to-Target"));
     // The budget table: one row per run, with the run's own generations/episodes and steps.
     assert!(md.contains("## Budget per run"), "{md}");

@@ -1,7 +1,9 @@
 //! Contract: `esrl eval` on a smoke-trained ES-SAC run writes `RUN/eval.json` with every field
 //! the Python package reads (run, agent, episodes with seed/return/length/q0/gait/trace, mean),
 //! with values that agree with the episode's own trace (recomputed here), deterministic across
-//! invocations and the same whether given the run or its checkpoint folder; `--json` prints
+//! invocations and the same whether given the run or its checkpoint folder; the gait cycle's
+//! support phases and each joint's time at a limit agree with the trace's contact flags and
+//! joint angles, and the side view has a frame every 0.1 s; `--json` prints
 //! the same object; `--record` writes one MCAP per episode; a pendulum run has returns only.
 
 use serde_json::Value;
@@ -41,7 +43,7 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len() as f64
 }
 
-const GAIT_KEYS: [&str; 19] = [
+const GAIT_KEYS: [&str; 21] = [
     "track_length",
     "track_time",
     "mean_forward_velocity",
@@ -61,6 +63,8 @@ const GAIT_KEYS: [&str; 19] = [
     "steps",
     "duration",
     "track_length",
+    "cycle",
+    "joints",
 ];
 
 #[test]
@@ -143,6 +147,75 @@ fn eval_json_has_every_field_and_agrees_with_its_trace() {
         assert!(ended);
         assert_eq!(g["fell"].as_bool(), e["terminated"].as_bool());
         assert!(rec.join(format!("episode-{k:03}.mcap")).is_file());
+
+        // Phases recounted from the contact flags of the trace.
+        let contact = tr["contact"].as_array().unwrap();
+        assert_eq!(contact.len(), len);
+        let flags: Vec<(bool, bool)> = contact
+            .iter()
+            .map(|c| (c[0].as_u64() == Some(1), c[1].as_u64() == Some(1)))
+            .collect();
+        let share = |f: &dyn Fn(&(bool, bool)) -> bool| {
+            flags.iter().filter(|c| f(c)).count() as f64 / len as f64
+        };
+        let c = &g["cycle"];
+        assert!(close(
+            c["double_support"].as_f64().unwrap(),
+            share(&|c| c.0 && c.1)
+        ));
+        assert!(close(
+            c["flight"].as_f64().unwrap(),
+            share(&|c| !c.0 && !c.1)
+        ));
+        let touchdowns = |foot: usize| {
+            let on = |i: usize| if foot == 0 { flags[i].0 } else { flags[i].1 };
+            (1..len).filter(|&i| on(i) && !on(i - 1)).count() as f64
+        };
+        assert_eq!(floats(&c["touchdowns"]), vec![touchdowns(0), touchdowns(1)]);
+        let class = c["gait_class"].as_str().unwrap();
+        assert!(
+            ["walk", "run", "hop", "shuffle", "stand", "fall"].contains(&class),
+            "{class}"
+        );
+        assert_eq!(c["gait_classes"][class].as_u64(), Some(1));
+
+        // Time at a limit recounted from the (rounded) joint angles, 1° margin.
+        let names = tr["joint_names"].as_array().unwrap();
+        assert_eq!(names.len(), 6);
+        let angles = tr["joint_angle"].as_array().unwrap();
+        assert_eq!(angles.len(), len);
+        let joints = g["joints"].as_array().unwrap();
+        for (j, joint) in joints.iter().enumerate() {
+            assert_eq!(joint["name"], names[j]);
+            let [lo, hi] = [0, 1].map(|b| tr["joint_limits"][j][b].as_f64().unwrap());
+            let q: Vec<f64> = angles.iter().map(|r| r[j].as_f64().unwrap()).collect();
+            let m = 1f64.to_radians();
+            // Angles are stored to 1e-4 rad: a sample that close to the margin may differ.
+            let near = q
+                .iter()
+                .filter(|&&q| ((q - lo - m).abs() < 1e-4) || ((hi - m - q).abs() < 1e-4))
+                .count() as f64;
+            let at = q.iter().filter(|&&q| q <= lo + m || q >= hi - m).count() as f64;
+            let got = joint["at_limit"].as_f64().unwrap() * len as f64;
+            assert!((got - at).abs() <= near, "{}: {got} vs {at}", joint["name"]);
+            assert!(joint["range"].as_f64().unwrap() >= 0.0);
+        }
+
+        // The side view: one frame every 4 steps (0.1 s), 11 parts for the humanoid.
+        let stick = &tr["stick"];
+        assert_eq!(stick["time"].as_array().unwrap().len(), len / 4);
+        let parts = stick["parts"].as_array().unwrap();
+        assert_eq!(parts.len(), 11);
+        for frame in stick["frames"].as_array().unwrap() {
+            for (part, coords) in parts.iter().zip(frame.as_array().unwrap()) {
+                let n = match part["kind"].as_str().unwrap() {
+                    "line" => 4,
+                    "box" => 8,
+                    _ => 2,
+                };
+                assert_eq!(coords.as_array().unwrap().len(), n);
+            }
+        }
     }
     let m = &eval["mean"];
     let returns: Vec<f64> = episodes

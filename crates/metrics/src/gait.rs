@@ -11,11 +11,22 @@
 //!   per-actuator means (all actuators log every step, so it is also the mean over all entries);
 //! - knee torque asymmetry = |T_L − T_R| / ((T_L + T_R)/2) with T = mean |τ| of each knee
 //!   (the Robinson et al. 1987 symmetry index: 0 symmetric, 2 at most; 0 when both are 0);
-//! - distance = last x − first x; duration = last `time` (time counts from reset, t = 0).
+//! - distance = last x − first x; duration = last `time` (time counts from reset, t = 0);
+//! - gait cycle ([`GaitCycle`], when the trace has the forces of two feet, left then right):
+//!   a foot is in contact when its force exceeds [`GaitThresholds::contact_force`]; phases,
+//!   touchdowns, alternation, cadence, stride times and the gait class as in
+//!   [`gait_phases`](crate::gait_phases) and [`classify_gait`](crate::classify_gait), with the
+//!   sample period `duration / steps`; step lengths and foot speed from `foot_positions` when
+//!   logged (foot speed = mean over the feet of |p_last − p_first| / duration, horizontal);
+//! - per actuated joint ([`JointMotion`], when `joint_angles` are logged): range of motion
+//!   (5th–95th percentile) and time within [`GaitThresholds::limit_margin`] of a limit from
+//!   `joint_limits`.
 
 use serde::{Deserialize, Serialize};
 
+use crate::cycle::{gait_phases, step_lengths, GaitCycle, GaitThresholds};
 use crate::error::{check_finite, MetricsError, Result};
+use crate::motion::{joint_motion, JointMotion};
 
 /// Per-step log of one rollout. Every per-step `Vec` has one entry per logged step; rows of
 /// `torques`, `powers` and `foot_forces` have one entry per actuator / foot, in the order of
@@ -47,6 +58,18 @@ pub struct GaitTrace {
     pub fell: bool,
     /// Time at which the environment declared success (torso past the track end), if it did.
     pub success_time: Option<f64>,
+    /// Actuated joint angles (rad), `[step][actuator]`; empty when not logged (then no
+    /// [`JointMotion`]).
+    #[serde(default)]
+    pub joint_angles: Vec<Vec<f64>>,
+    /// Position limits `[lower, upper]` (rad) per actuator, `None` for a joint without; empty
+    /// when unknown (then no time at a limit).
+    #[serde(default)]
+    pub joint_limits: Vec<Option<[f64; 2]>>,
+    /// Horizontal position `[x, y]` (m, world) of each foot, `[step][foot]`; empty when not
+    /// logged (then no step lengths and no foot speed).
+    #[serde(default)]
+    pub foot_positions: Vec<Vec<[f64; 2]>>,
 }
 
 /// One step to append to a [`GaitTrace`] with [`GaitTrace::push`].
@@ -68,6 +91,10 @@ pub struct GaitStep<'a> {
     pub powers: &'a [f64],
     /// Contact normal force per foot.
     pub foot_forces: &'a [f64],
+    /// Actuated joint angles (rad); empty when not logged.
+    pub joint_angles: &'a [f64],
+    /// Horizontal position `[x, y]` of each foot (m); empty when not logged.
+    pub foot_positions: &'a [[f64; 2]],
 }
 
 impl GaitTrace {
@@ -80,7 +107,9 @@ impl GaitTrace {
         }
     }
 
-    /// Appends one step (lengths are checked by [`gait_metrics`], not here).
+    /// Appends one step (lengths are checked by [`gait_metrics`], not here). Empty
+    /// `joint_angles` / `foot_positions` are not appended, so a trace that never logs them
+    /// keeps them empty.
     pub fn push(&mut self, step: &GaitStep<'_>) {
         self.time.push(step.time);
         self.torso_x.push(step.torso_x);
@@ -90,6 +119,12 @@ impl GaitTrace {
         self.torques.push(step.torques.to_vec());
         self.powers.push(step.powers.to_vec());
         self.foot_forces.push(step.foot_forces.to_vec());
+        if !step.joint_angles.is_empty() {
+            self.joint_angles.push(step.joint_angles.to_vec());
+        }
+        if !step.foot_positions.is_empty() {
+            self.foot_positions.push(step.foot_positions.to_vec());
+        }
     }
 
     /// Number of logged steps.
@@ -112,6 +147,9 @@ pub struct GaitOptions {
     pub left_knee: String,
     /// Actuator name of the right knee. Default `"right_knee"`.
     pub right_knee: String,
+    /// Thresholds of the gait-cycle metrics, the gait class and the time at a limit.
+    #[serde(default)]
+    pub thresholds: GaitThresholds,
 }
 
 impl Default for GaitOptions {
@@ -120,6 +158,7 @@ impl Default for GaitOptions {
             track_length: 50.0,
             left_knee: "left_knee".into(),
             right_knee: "right_knee".into(),
+            thresholds: GaitThresholds::default(),
         }
     }
 }
@@ -163,6 +202,12 @@ pub struct GaitMetrics {
     pub steps: usize,
     /// Last logged time (s since reset).
     pub duration: f64,
+    /// Gait-cycle metrics and the gait class; `None` without the contact forces of two feet.
+    #[serde(default)]
+    pub cycle: Option<GaitCycle>,
+    /// Range of motion and time at a limit per actuated joint; empty without joint angles.
+    #[serde(default)]
+    pub joints: Vec<JointMotion>,
 }
 
 fn check_len(len: usize, expected: usize, what: &str) -> Result<()> {
@@ -206,8 +251,10 @@ fn actuator_index(names: &[String], name: &str) -> Result<usize> {
 /// Computes the [`GaitMetrics`] of a rollout (formulas in the module docs).
 ///
 /// Errors: an empty trace, per-step vectors of different lengths, rows of the wrong width,
-/// NaN/inf anywhere, an unknown knee name, or a non-positive track length.
+/// NaN/inf anywhere, an unknown knee name, a non-positive track length, invalid thresholds,
+/// or joint limits / foot positions that do not match the actuators / feet.
 pub fn gait_metrics(trace: &GaitTrace, options: &GaitOptions) -> Result<GaitMetrics> {
+    options.thresholds.validate()?;
     if !(options.track_length.is_finite() && options.track_length > 0.0) {
         return Err(MetricsError::InvalidParameter {
             what: "track_length".into(),
@@ -261,6 +308,9 @@ pub fn gait_metrics(trace: &GaitTrace, options: &GaitOptions) -> Result<GaitMetr
             .position(|&x| x >= options.track_length)
             .map(|i| trace.time[i])
     });
+    let duration = trace.time[n - 1];
+    let cycle = gait_cycle(trace, options, duration)?;
+    let joints = joint_motions(trace, &options.thresholds)?;
     let (tl, tr) = (mean_abs_torque[left], mean_abs_torque[right]);
     let knee_torque_asymmetry = if tl + tr == 0.0 {
         0.0
@@ -285,6 +335,82 @@ pub fn gait_metrics(trace: &GaitTrace, options: &GaitOptions) -> Result<GaitMetr
         distance: trace.torso_x[n - 1] - trace.torso_x[0],
         fell: trace.fell,
         steps: n,
-        duration: trace.time[n - 1],
+        duration,
+        cycle,
+        joints,
     })
+}
+
+/// The gait cycle of a trace with two feet (forces already checked by the caller).
+fn gait_cycle(
+    trace: &GaitTrace,
+    options: &GaitOptions,
+    duration: f64,
+) -> Result<Option<GaitCycle>> {
+    if trace.foot_names.len() != 2 || trace.foot_forces.is_empty() {
+        return Ok(None);
+    }
+    let n = trace.time.len();
+    let t = &options.thresholds;
+    let dt = duration / n as f64;
+    if !(dt.is_finite() && dt > 0.0) {
+        return Err(MetricsError::InvalidParameter {
+            what: "time".into(),
+            value: duration.to_string(),
+            why: "the last time must be > 0 (time counts from reset) for the gait cycle".into(),
+        });
+    }
+    let contact = |foot: usize| -> Vec<bool> {
+        trace
+            .foot_forces
+            .iter()
+            .map(|r| r[foot] > t.contact_force)
+            .collect()
+    };
+    let (left, right) = (contact(0), contact(1));
+    let phases = gait_phases(&left, &right, dt, t.sync_window)?;
+    let (steps, foot_speed) = if trace.foot_positions.is_empty() {
+        (Vec::new(), None)
+    } else {
+        check_len(trace.foot_positions.len(), n, "foot_positions")?;
+        for (step, row) in trace.foot_positions.iter().enumerate() {
+            let name = format!("foot_positions[{step}]");
+            check_len(row.len(), 2, &name)?;
+            check_finite(&[row[0][0], row[0][1], row[1][0], row[1][1]], &name)?;
+        }
+        let x: Vec<[f64; 2]> = trace
+            .foot_positions
+            .iter()
+            .map(|r| [r[0][0], r[1][0]])
+            .collect();
+        let steps = step_lengths(&left, &right, &x, dt, t.sync_window)?;
+        let (a, b) = (&trace.foot_positions[0], &trace.foot_positions[n - 1]);
+        let travel = |f: usize| (b[f][0] - a[f][0]).hypot(b[f][1] - a[f][1]);
+        (steps, Some(0.5 * (travel(0) + travel(1)) / duration))
+    };
+    Ok(Some(GaitCycle::from_parts(
+        &phases, &steps, foot_speed, trace.fell, t,
+    )))
+}
+
+/// Range of motion and time at a limit of every actuator (empty without joint angles).
+fn joint_motions(trace: &GaitTrace, t: &GaitThresholds) -> Result<Vec<JointMotion>> {
+    if trace.joint_angles.is_empty() {
+        return Ok(Vec::new());
+    }
+    let n_act = trace.actuator_names.len();
+    check_len(trace.joint_angles.len(), trace.time.len(), "joint_angles")?;
+    for (step, row) in trace.joint_angles.iter().enumerate() {
+        check_len(row.len(), n_act, &format!("joint_angles[{step}]"))?;
+    }
+    if !trace.joint_limits.is_empty() {
+        check_len(trace.joint_limits.len(), n_act, "joint_limits")?;
+    }
+    (0..n_act)
+        .map(|j| {
+            let angles: Vec<f64> = trace.joint_angles.iter().map(|r| r[j]).collect();
+            let limits = trace.joint_limits.get(j).copied().flatten();
+            joint_motion(&trace.actuator_names[j], &angles, limits, t.limit_margin)
+        })
+        .collect()
 }

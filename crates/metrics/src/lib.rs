@@ -1,12 +1,20 @@
 //! Learning-curve and gait metrics: AUC, Best-Win-50, Episodes-to-Target, track time, sway,
-//! torque, power, symmetry — the one implementation used by the CLI (`eval`, `compare`) and,
-//! through `esrl_rs`, by Python (SPEC §6; paper §5, Table 1 and Fig. 5).
+//! torque, power, symmetry, gait cycle and gait class — the one implementation used by the CLI
+//! (`eval`, `compare`) and, through `esrl_rs`, by Python (SPEC §6; paper §5, Table 1 and Fig. 5).
 //!
 //! - [`CurveSummary`] and friends: AUC, nAUC, Final-50, Best-Win-50, Episodes-to-Target and
 //!   the per-method target (80% of the median Best-Win-50 over the method's seeds);
 //! - [`mean_sd`]: mean ± sample SD across seeds;
-//! - [`gait_metrics`]: behaviour of one evaluation rollout from a [`GaitTrace`];
-//! - [`table1`], [`table1_markdown`], [`table1_csv`]: the paper's Table 1 plus gait columns.
+//! - [`gait_metrics`]: behaviour of one evaluation rollout from a [`GaitTrace`], including
+//!   its [`GaitCycle`] (support phases, touchdowns, alternation, cadence, step length, stride
+//!   variability, the [`GaitClass`] walk/run/hop/shuffle/stand/fall) and each joint's
+//!   [`JointMotion`] (range of motion, time at a limit);
+//! - [`gait_phases`], [`step_lengths`], [`classify_gait`], [`joint_motion`]: the same on any
+//!   contact trace or angle series, with the thresholds and their sources in
+//!   [`GaitThresholds`];
+//! - [`table1`], [`table1_markdown`], [`table1_csv`]: the paper's Table 1 plus gait columns;
+//!   [`actuator_markdown`] and [`joint_markdown`]: per actuator torque, power, range of motion
+//!   and time at a limit.
 //!
 //! Pure functions over plain slices and structs; this crate depends on no other esrl crate.
 //!
@@ -34,8 +42,10 @@
 //! memory (Best-Win-50 is O(n·50)).
 
 mod curve;
+mod cycle;
 mod error;
 mod gait;
+mod motion;
 mod stats;
 mod table;
 
@@ -44,10 +54,15 @@ pub use curve::{
     final_mean, median, method_target, method_target_with, nauc, summarize_method, trailing_means,
     CurveSummary, TARGET_FRACTION, WINDOW,
 };
+pub use cycle::{
+    classify_gait, gait_phases, majority_class, mean_cycle, step_lengths, GaitClass,
+    GaitClassInput, GaitCycle, GaitPhases, GaitThresholds,
+};
 pub use error::{MetricsError, Result};
 pub use gait::{gait_metrics, GaitMetrics, GaitOptions, GaitStep, GaitTrace};
+pub use motion::{joint_motion, mean_joint_motion, percentile, JointMotion};
 pub use stats::{mean_sd, MeanSd};
 pub use table::{
-    actuator_markdown, format_number, table1, table1_csv, table1_markdown, AgentRuns, Cell,
-    SeedResult, Table1Row,
+    actuator_markdown, format_number, gait_classes_text, joint_markdown, table1, table1_csv,
+    table1_markdown, AgentRuns, Cell, SeedResult, Table1Row,
 };

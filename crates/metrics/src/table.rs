@@ -1,15 +1,21 @@
 //! Paper Table 1: per-agent mean ± sample SD across seeds, rendered as Markdown and CSV.
 //!
 //! Columns: the paper's (nAUC, AUC, Final-50, Best-Win-50, Episodes-to-Target, track time)
-//! followed by the gait metrics of SPEC §6 and the mean Q0. Quantities that only some seeds
+//! followed by the gait metrics of SPEC §6, the gait cycle (the gait classes of all evaluated
+//! episodes, double support, flight, alternation, cadence, step length, stride-time CV, the
+//! share of time the actuated joints spend at a limit) and the mean Q0. Per joint, the range of
+//! motion and time at a limit are in [`joint_markdown`]. Quantities that only some seeds
 //! have (Episodes-to-Target when a seed never reaches its target, track time when a rollout
 //! does not finish, gait metrics of seeds without an evaluation) are aggregated over the seeds
 //! that have them, and the cell says how many: `454.50 ± 40.31 (2/3)`; no seed at all gives
 //! `-` (the paper's mark for "did not finish"). One value has no SD and is shown alone.
 
+use std::collections::BTreeMap;
+
 use serde::{Deserialize, Serialize};
 
 use crate::curve::CurveSummary;
+use crate::cycle::{GaitClass, GaitCycle};
 use crate::error::{MetricsError, Result};
 use crate::gait::GaitMetrics;
 use crate::stats::{mean_sd, MeanSd};
@@ -45,7 +51,7 @@ pub struct AgentRuns {
 }
 
 /// One table cell: mean ± SD over the seeds that have the quantity.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct Cell {
     /// Statistics over the seeds that have a value; `None` if no seed has one.
     pub stat: Option<MeanSd>,
@@ -173,6 +179,42 @@ pub struct Table1Row {
     pub mean_abs_torque_per_actuator: Vec<Cell>,
     /// Mean |power| per actuator (paper Fig. 5d).
     pub mean_abs_power_per_actuator: Vec<Cell>,
+    /// Evaluated episodes per gait class, over all seeds.
+    #[serde(default)]
+    pub gait_classes: BTreeMap<GaitClass, usize>,
+    /// Fraction of time in double support.
+    #[serde(default)]
+    pub double_support: Cell,
+    /// Fraction of time in single support.
+    #[serde(default)]
+    pub single_support: Cell,
+    /// Fraction of time in flight.
+    #[serde(default)]
+    pub flight: Cell,
+    /// Alternation of the touchdowns.
+    #[serde(default)]
+    pub alternation: Cell,
+    /// Cadence, steps/min.
+    #[serde(default)]
+    pub cadence: Cell,
+    /// Mean step length, m.
+    #[serde(default)]
+    pub step_length: Cell,
+    /// Stride-time variability (SD / mean).
+    #[serde(default)]
+    pub stride_time_cv: Cell,
+    /// Share of time at a limit, mean over the actuated joints that have limits.
+    #[serde(default)]
+    pub time_at_limit: Cell,
+    /// Joint names of the per-joint cells (empty without joint angles).
+    #[serde(default)]
+    pub joint_names: Vec<String>,
+    /// Range of motion (5th–95th percentile) per joint, rad.
+    #[serde(default)]
+    pub joint_range: Vec<Cell>,
+    /// Share of time at a limit per joint.
+    #[serde(default)]
+    pub joint_at_limit: Vec<Cell>,
 }
 
 /// Aggregates each agent's seeds into a [`Table1Row`] (rows in input order).
@@ -209,6 +251,30 @@ fn agent_row(runs: &AgentRuns) -> Result<Table1Row> {
             why: format!("every seed must use the same actuators as the first, {actuator_names:?}"),
         });
     }
+    let cycle_col = |name: &str, f: &dyn Fn(&GaitCycle) -> Option<f64>| {
+        gait_col(name, &|g: &GaitMetrics| g.cycle.as_ref().and_then(f))
+    };
+    let mut gait_classes = BTreeMap::new();
+    for c in gaits.iter().filter_map(|g| g.cycle.as_ref()) {
+        for (&class, &n) in &c.gait_classes {
+            *gait_classes.entry(class).or_insert(0) += n;
+        }
+    }
+    let joint_names: Vec<String> = gaits
+        .iter()
+        .find(|g| !g.joints.is_empty())
+        .map(|g| g.joints.iter().map(|j| j.name.clone()).collect())
+        .unwrap_or_default();
+    let per_joint = |name: &str, f: &dyn Fn(&crate::motion::JointMotion) -> Option<f64>| {
+        joint_names
+            .iter()
+            .map(|joint| {
+                gait_col(&format!("{name}[{joint}]"), &|g| {
+                    g.joints.iter().find(|j| &j.name == joint).and_then(f)
+                })
+            })
+            .collect::<Result<Vec<Cell>>>()
+    };
     let per_actuator = |name: &str, f: &dyn Fn(&GaitMetrics) -> &Vec<f64>| {
         (0..actuator_names.len())
             .map(|j| {
@@ -248,7 +314,40 @@ fn agent_row(runs: &AgentRuns) -> Result<Table1Row> {
         mean_abs_torque_per_actuator: per_actuator("mean_abs_torque", &|g| &g.mean_abs_torque)?,
         mean_abs_power_per_actuator: per_actuator("mean_abs_power", &|g| &g.mean_abs_power)?,
         actuator_names,
+        double_support: cycle_col("double_support", &|c| Some(c.double_support))?,
+        single_support: cycle_col("single_support", &|c| Some(c.single_support))?,
+        flight: cycle_col("flight", &|c| Some(c.flight))?,
+        alternation: cycle_col("alternation", &|c| c.alternation)?,
+        cadence: cycle_col("cadence", &|c| Some(c.cadence))?,
+        step_length: cycle_col("step_length", &|c| c.step_length_mean)?,
+        stride_time_cv: cycle_col("stride_time_cv", &|c| c.stride_time_cv)?,
+        time_at_limit: gait_col("time_at_limit", &|g| {
+            let shares: Vec<f64> = g.joints.iter().filter_map(|j| j.at_limit).collect();
+            (!shares.is_empty()).then(|| shares.iter().sum::<f64>() / shares.len() as f64)
+        })?,
+        gait_classes,
+        joint_range: per_joint("joint_range", &|j| Some(j.range))?,
+        joint_at_limit: per_joint("joint_at_limit", &|j| j.at_limit)?,
+        joint_names,
     })
+}
+
+/// `hop 7, fall 2`: episodes per class, most frequent first (ties in [`GaitClass::ALL`]
+/// order, most locomotive first); `-` for none.
+pub fn gait_classes_text(counts: &BTreeMap<GaitClass, usize>) -> String {
+    let mut list: Vec<(GaitClass, usize)> = GaitClass::ALL
+        .iter()
+        .rev()
+        .filter_map(|c| counts.get(c).filter(|&&n| n > 0).map(|&n| (*c, n)))
+        .collect();
+    if list.is_empty() {
+        return "-".into();
+    }
+    list.sort_by_key(|&(_, n)| std::cmp::Reverse(n));
+    list.iter()
+        .map(|(c, n)| format!("{c} {n}"))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// The Markdown columns after `Agent` and `Seeds`, with how to read each cell from a row.
@@ -301,6 +400,16 @@ fn markdown_columns(rows: &[Table1Row]) -> Vec<(String, MarkdownCell)> {
                 format!("{}/{}", r.falls, r.gait_runs)
             }
         }),
+        ("Gait (episodes)".into(), |r| {
+            gait_classes_text(&r.gait_classes)
+        }),
+        ("Double Support".into(), |r| r.double_support.to_markdown()),
+        ("Flight".into(), |r| r.flight.to_markdown()),
+        ("Alternation".into(), |r| r.alternation.to_markdown()),
+        ("Cadence (steps/min)".into(), |r| r.cadence.to_markdown()),
+        ("Step Length (m)".into(), |r| r.step_length.to_markdown()),
+        ("Stride CV".into(), |r| r.stride_time_cv.to_markdown()),
+        ("At Limit".into(), |r| r.time_at_limit.to_markdown()),
         ("Q0".into(), |r| r.q0_mean.to_markdown()),
     ]
 }
@@ -381,6 +490,60 @@ pub fn actuator_markdown(rows: &[Table1Row]) -> String {
     out
 }
 
+/// Renders the range of motion (5th–95th percentile, degrees) and the share of time at a
+/// limit of each actuated joint as a Markdown table, one line per agent; joints are those of
+/// the first row that has any.
+pub fn joint_markdown(rows: &[Table1Row]) -> String {
+    let names = rows
+        .iter()
+        .find(|r| !r.joint_names.is_empty())
+        .map(|r| r.joint_names.clone())
+        .unwrap_or_default();
+    let mut out = String::from("| Agent |");
+    for n in &names {
+        out.push_str(&format!(" {} ROM (°) |", markdown_escape(n)));
+    }
+    for n in &names {
+        out.push_str(&format!(" {} at limit |", markdown_escape(n)));
+    }
+    out.push_str("\n|---|");
+    out.push_str(&"---:|".repeat(2 * names.len()));
+    out.push('\n');
+    let degrees = |c: &Cell| Cell {
+        stat: c.stat.map(|s| MeanSd {
+            mean: s.mean.to_degrees(),
+            sd: s.sd.map(f64::to_degrees),
+            n: s.n,
+        }),
+        seeds: c.seeds,
+    };
+    for row in rows {
+        out.push_str(&format!("| {} |", markdown_escape(&row.agent)));
+        for (cells, deg) in [(&row.joint_range, true), (&row.joint_at_limit, false)] {
+            for name in &names {
+                let cell = row
+                    .joint_names
+                    .iter()
+                    .position(|n| n == name)
+                    .and_then(|j| cells.get(j))
+                    .map_or_else(
+                        || "-".into(),
+                        |c| {
+                            if deg {
+                                degrees(c).to_markdown()
+                            } else {
+                                c.to_markdown()
+                            }
+                        },
+                    );
+                out.push_str(&format!(" {cell} |"));
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
 /// The CSV metric keys, in column order, with how to read each cell from a row.
 const CSV_CELLS: &[(&str, CellOf)] = &[
     ("nauc", |r| &r.nauc),
@@ -398,6 +561,14 @@ const CSV_CELLS: &[(&str, CellOf)] = &[
     ("knee_torque_asymmetry", |r| &r.knee_torque_asymmetry),
     ("distance", |r| &r.distance),
     ("q0_mean", |r| &r.q0_mean),
+    ("double_support", |r| &r.double_support),
+    ("single_support", |r| &r.single_support),
+    ("flight", |r| &r.flight),
+    ("alternation", |r| &r.alternation),
+    ("cadence", |r| &r.cadence),
+    ("step_length", |r| &r.step_length),
+    ("stride_time_cv", |r| &r.stride_time_cv),
+    ("time_at_limit", |r| &r.time_at_limit),
 ];
 
 fn csv_field(text: &str) -> String {
@@ -410,7 +581,8 @@ fn csv_field(text: &str) -> String {
 
 /// Renders Table 1 as CSV for machines: `agent,seeds`, then `<key>_mean,<key>_sd,<key>_n` for
 /// each metric (keys as in [`Table1Row`]; empty when undefined; full precision), then
-/// `track_length,falls,gait_runs`. RFC 4180 quoting, `\n` line endings.
+/// `track_length,falls,gait_runs,gait_classes` (`gait_classes` as `hop:7;fall:2`, most
+/// frequent first). RFC 4180 quoting, `\n` line endings.
 pub fn table1_csv(rows: &[Table1Row]) -> String {
     let mut header = vec!["agent".to_string(), "seeds".to_string()];
     for (key, _) in CSV_CELLS {
@@ -418,7 +590,7 @@ pub fn table1_csv(rows: &[Table1Row]) -> String {
             header.push(format!("{key}_{suffix}"));
         }
     }
-    header.extend(["track_length", "falls", "gait_runs"].map(String::from));
+    header.extend(["track_length", "falls", "gait_runs", "gait_classes"].map(String::from));
     let mut out = header.join(",");
     out.push('\n');
     for row in rows {
@@ -435,6 +607,12 @@ pub fn table1_csv(rows: &[Table1Row]) -> String {
         fields.push(row.track_length.map_or_else(String::new, |l| l.to_string()));
         fields.push(row.falls.to_string());
         fields.push(row.gait_runs.to_string());
+        let classes = gait_classes_text(&row.gait_classes);
+        fields.push(if classes == "-" {
+            String::new()
+        } else {
+            classes.replace(", ", ";").replace(' ', ":")
+        });
         out.push_str(&fields.join(","));
         out.push('\n');
     }

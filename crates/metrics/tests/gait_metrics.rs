@@ -44,6 +44,8 @@ fn trace() -> GaitTrace {
             torques: &torques[i],
             powers: &powers[i],
             foot_forces: &feet[i],
+            joint_angles: &[],
+            foot_positions: &[],
         });
     }
     t
@@ -70,6 +72,16 @@ fn hand_computed_trace() {
     assert_eq!(g.steps, 4);
     assert!(close(g.duration, 0.1));
     assert_eq!(g.actuator_names[3], "right_knee");
+    // Contact (> 10 N): left [1, 1, 0, 0], right [0, 1, 1, 0]; the right touches down once.
+    let c = g.cycle.expect("two feet with forces give a gait cycle");
+    assert_eq!(
+        (c.double_support, c.single_support, c.flight),
+        (0.25, 0.5, 0.25)
+    );
+    assert_eq!(c.touchdowns, [0.0, 1.0]);
+    assert_eq!(c.gait_class, esrl_metrics::GaitClass::Stand);
+    assert_eq!(c.foot_speed, None, "no foot positions logged");
+    assert!(g.joints.is_empty(), "no joint angles logged");
 }
 
 #[test]

@@ -1,9 +1,12 @@
 //! Contract: Table 1 aggregates seeds into mean ± sample SD (counting seeds that lack a value)
 //! and renders exactly the documented Markdown and CSV text.
 
+use std::collections::BTreeMap;
+
 use esrl_metrics::{
-    actuator_markdown, format_number, table1, table1_csv, table1_markdown, AgentRuns, CurveSummary,
-    GaitMetrics, MetricsError, SeedResult,
+    actuator_markdown, format_number, joint_markdown, table1, table1_csv, table1_markdown,
+    AgentRuns, CurveSummary, GaitClass, GaitCycle, GaitMetrics, JointMotion, MetricsError,
+    SeedResult,
 };
 
 fn summary(nauc: f64, auc: f64, final_50: f64, best: f64, ett: Option<usize>) -> CurveSummary {
@@ -49,7 +52,60 @@ fn gait(
         fell,
         steps: 100,
         duration: 2.5,
+        cycle: None,
+        joints: vec![],
     }
+}
+
+/// Gait-cycle metrics with the table's columns given; the rest fixed.
+fn cycle(
+    ds: f64,
+    flight: f64,
+    alternation: Option<f64>,
+    cadence: f64,
+    step: Option<f64>,
+    cv: Option<f64>,
+    classes: &[(GaitClass, usize)],
+) -> GaitCycle {
+    GaitCycle {
+        contact_force: 10.0,
+        touchdowns: [5.0, 5.0],
+        step_count: 10.0,
+        cadence,
+        alternation,
+        synchronous: Some(0.0),
+        double_support: ds,
+        single_support: 1.0 - ds - flight,
+        flight,
+        duty_factor: [0.6, 0.6],
+        step_length_mean: step,
+        step_length_sd: None,
+        stride_time_mean: Some(1.0),
+        stride_time_cv: cv,
+        foot_speed: Some(1.0),
+        gait_class: classes[0].0,
+        gait_classes: classes.iter().copied().collect::<BTreeMap<_, _>>(),
+    }
+}
+
+fn knee(range: f64, at_limit: Option<f64>) -> Vec<JointMotion> {
+    vec![JointMotion {
+        name: "left_knee".into(),
+        p5: 0.1,
+        p95: 0.1 + range,
+        range,
+        limits: at_limit.map(|_| [0.0, 1.0]),
+        at_lower: at_limit,
+        at_upper: at_limit.map(|_| 0.0),
+        at_limit,
+    }]
+}
+
+/// `gait` with a gait cycle and joint motions.
+fn with_cycle(mut g: GaitMetrics, c: GaitCycle, joints: Vec<JointMotion>) -> GaitMetrics {
+    g.cycle = Some(c);
+    g.joints = joints;
+    g
 }
 
 fn agents() -> Vec<AgentRuns> {
@@ -59,24 +115,46 @@ fn agents() -> Vec<AgentRuns> {
             seeds: vec![
                 SeedResult {
                     summary: summary(1.0, 1500.0, 10.0, 20.0, Some(100)),
-                    gait: Some(gait(
-                        Some(40.0),
-                        1.25,
-                        0.05,
-                        -0.02,
-                        0.06,
-                        40.0,
-                        100.0,
-                        0.1,
-                        50.0,
-                        false,
+                    gait: Some(with_cycle(
+                        gait(
+                            Some(40.0),
+                            1.25,
+                            0.05,
+                            -0.02,
+                            0.06,
+                            40.0,
+                            100.0,
+                            0.1,
+                            50.0,
+                            false,
+                        ),
+                        cycle(
+                            0.2,
+                            0.0,
+                            Some(1.0),
+                            100.0,
+                            Some(0.6),
+                            Some(0.02),
+                            &[(GaitClass::Walk, 2), (GaitClass::Fall, 1)],
+                        ),
+                        knee(0.1, Some(0.5)),
                     )),
                     q0_mean: Some(50.0),
                 },
                 SeedResult {
                     summary: summary(2.0, 3000.0, 10.0, 22.0, Some(200)),
-                    gait: Some(gait(
-                        None, 0.75, 0.15, -0.04, 0.10, 44.0, 120.0, 0.3, 20.0, true,
+                    gait: Some(with_cycle(
+                        gait(None, 0.75, 0.15, -0.04, 0.10, 44.0, 120.0, 0.3, 20.0, true),
+                        cycle(
+                            0.4,
+                            0.1,
+                            Some(0.5),
+                            120.0,
+                            None,
+                            None,
+                            &[(GaitClass::Hop, 3)],
+                        ),
+                        knee(0.3, None),
                     )),
                     q0_mean: Some(60.0),
                 },
@@ -117,10 +195,10 @@ fn aggregation_by_hand() {
 fn markdown_text() {
     let md = table1_markdown(&table1(&agents()).unwrap());
     let expected = "\
-| Agent | Seeds | nAUC | AUC | Final-50 | Best-Win-50 | Episodes-to-Target | 50 m Track Time (s) | Fwd Velocity (m/s) | Mean \\|Lateral\\| (m) | Mean Vertical (m) | Mean \\|Vertical\\| (m) | Mean \\|Torque\\| (N·m) | Mean \\|Power\\| (W) | Knee Asymmetry | Distance (m) | Falls | Q0 |
-|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|
-| es-sac | 3 | 2.00 ± 1.00 | 3000.00 ± 1500.00 | 10.00 ± 0.00 | 22.00 ± 2.00 | 150.00 ± 70.71 (2/3) | 40.00 (1/3) | 1.00 ± 0.35 (2/3) | 0.1000 ± 0.0707 (2/3) | -0.0300 ± 0.0141 (2/3) | 0.0800 ± 0.0283 (2/3) | 42.00 ± 2.83 (2/3) | 110.00 ± 14.14 (2/3) | 0.2000 ± 0.1414 (2/3) | 35.00 ± 21.21 (2/3) | 1/2 | 60.00 ± 10.00 |
-| sac | 1 | 1.23 | 0.00 | -5.50 | 1.000e6 | - | - | - | - | - | - | - | - | - | - | - | - |
+| Agent | Seeds | nAUC | AUC | Final-50 | Best-Win-50 | Episodes-to-Target | 50 m Track Time (s) | Fwd Velocity (m/s) | Mean \\|Lateral\\| (m) | Mean Vertical (m) | Mean \\|Vertical\\| (m) | Mean \\|Torque\\| (N·m) | Mean \\|Power\\| (W) | Knee Asymmetry | Distance (m) | Falls | Gait (episodes) | Double Support | Flight | Alternation | Cadence (steps/min) | Step Length (m) | Stride CV | At Limit | Q0 |
+|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|
+| es-sac | 3 | 2.00 ± 1.00 | 3000.00 ± 1500.00 | 10.00 ± 0.00 | 22.00 ± 2.00 | 150.00 ± 70.71 (2/3) | 40.00 (1/3) | 1.00 ± 0.35 (2/3) | 0.1000 ± 0.0707 (2/3) | -0.0300 ± 0.0141 (2/3) | 0.0800 ± 0.0283 (2/3) | 42.00 ± 2.83 (2/3) | 110.00 ± 14.14 (2/3) | 0.2000 ± 0.1414 (2/3) | 35.00 ± 21.21 (2/3) | 1/2 | hop 3, walk 2, fall 1 | 0.3000 ± 0.1414 (2/3) | 0.0500 ± 0.0707 (2/3) | 0.7500 ± 0.3536 (2/3) | 110.00 ± 14.14 (2/3) | 0.6000 (1/3) | 0.0200 (1/3) | 0.5000 (1/3) | 60.00 ± 10.00 |
+| sac | 1 | 1.23 | 0.00 | -5.50 | 1.000e6 | - | - | - | - | - | - | - | - | - | - | - | - | - | - | - | - | - | - | - | - |
 ";
     assert_eq!(md, expected);
 }
@@ -138,6 +216,19 @@ fn actuator_markdown_text() {
 }
 
 #[test]
+fn joint_markdown_text() {
+    let md = joint_markdown(&table1(&agents()).unwrap());
+    // Ranges 0.1 and 0.3 rad: mean 0.2 rad = 11.46°, SD √0.02 rad = 8.10°.
+    let expected = "\
+| Agent | left_knee ROM (°) | left_knee at limit |
+|---|---:|---:|
+| es-sac | 11.46 ± 8.10 (2/3) | 0.5000 (1/3) |
+| sac | - | - |
+";
+    assert_eq!(md, expected);
+}
+
+#[test]
 fn csv_text() {
     let mut input = agents();
     input[1].agent = "sac, \"v2\"".into();
@@ -145,7 +236,7 @@ fn csv_text() {
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines.len(), 3);
     let header: Vec<&str> = lines[0].split(',').collect();
-    assert_eq!(header.len(), 2 + 15 * 3 + 3);
+    assert_eq!(header.len(), 2 + 23 * 3 + 4);
     assert_eq!(
         &header[..5],
         ["agent", "seeds", "nauc_mean", "nauc_sd", "nauc_n"]
@@ -160,21 +251,37 @@ fn csv_text() {
     );
     assert_eq!(
         &header[header.len() - 3..],
-        ["track_length", "falls", "gait_runs"]
+        ["falls", "gait_runs", "gait_classes"]
+    );
+    assert_eq!(
+        &header[44..50],
+        [
+            "q0_mean_mean",
+            "q0_mean_sd",
+            "q0_mean_n",
+            "double_support_mean",
+            "double_support_sd",
+            "double_support_n"
+        ]
     );
     assert!(
         lines[1].starts_with("es-sac,3,2,1,3,3000,1500,3,10,0,3,22,2,3,150,70.71067811865476,2,"),
         "{}",
         lines[1]
     );
-    assert!(lines[1].ends_with(",60,10,3,50,1,2"), "{}", lines[1]);
+    assert!(lines[1].contains(",60,10,3,"), "{}", lines[1]);
+    assert!(
+        lines[1].ends_with(",0.5,,1,50,1,2,hop:3;walk:2;fall:1"),
+        "{}",
+        lines[1]
+    );
     // Quoted name, one seed: empty SD, undefined cells empty with n = 0.
     assert!(
         lines[2].starts_with("\"sac, \"\"v2\"\"\",1,1.23,,1,0,,1,-5.5,,1,1000000,,1,,,0,"),
         "{}",
         lines[2]
     );
-    assert!(lines[2].ends_with(",,,0,,0,0"), "{}", lines[2]);
+    assert!(lines[2].ends_with(",,,0,,0,0,"), "{}", lines[2]);
 }
 
 #[test]

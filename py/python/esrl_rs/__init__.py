@@ -1,6 +1,7 @@
 """Analyse esrl runs from Python: run folders and evaluations as NumPy arrays, the metrics of
-the paper (one implementation, in Rust), Fig. 5 plots and Table 1, MCAP recordings, and the
-environments as Gymnasium ``Env``\\ s.
+the paper and the gait-cycle metrics (one implementation, in Rust), Fig. 5 plots, Table 1 and
+pictures of the gait (``esrl_rs.gait``), MCAP recordings, and the environments as Gymnasium
+``Env``\\ s.
 
 >>> import esrl_rs
 >>> run = esrl_rs.load_run("runs/pendulum")            # doctest: +SKIP
@@ -17,7 +18,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from . import metrics
+from . import gait, metrics
 from ._native import (
     EsrlError,
     __version__,
@@ -41,6 +42,7 @@ __all__ = [
     "Run",
     "WalkEnv",
     "__version__",
+    "gait",
     "group_by_agent",
     "load_eval",
     "load_policy",

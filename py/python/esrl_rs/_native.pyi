@@ -105,8 +105,33 @@ class metrics:  # a submodule of the native module
     @staticmethod
     def gait_metrics(
         trace: Mapping[str, Any], track_length: float = 50.0, left_knee: str = "left_knee",
-        right_knee: str = "right_knee",
+        right_knee: str = "right_knee", thresholds: Optional[Mapping[str, Any]] = None,
     ) -> Dict[str, Any]: ...
+    @staticmethod
+    def gait_thresholds() -> Dict[str, Any]: ...
+    @staticmethod
+    def gait_phases(
+        left_contact: _ArrayLike, right_contact: _ArrayLike, dt: float,
+        sync_window: Optional[float] = None,
+    ) -> Dict[str, Any]: ...
+    @staticmethod
+    def step_lengths(
+        left_contact: _ArrayLike, right_contact: _ArrayLike, foot_x: Any, dt: float,
+        sync_window: Optional[float] = None,
+    ) -> np.ndarray: ...
+    @staticmethod
+    def classify_gait(
+        inputs: Mapping[str, Any], thresholds: Optional[Mapping[str, Any]] = None
+    ) -> str: ...
+    @staticmethod
+    def joint_motion(
+        name: str, angles: _ArrayLike, limits: Optional[Tuple[float, float]] = None,
+        margin: Optional[float] = None,
+    ) -> Dict[str, Any]: ...
+    @staticmethod
+    def percentile(values: _ArrayLike, p: float) -> float: ...
+    @staticmethod
+    def joint_markdown(agents: Sequence[Mapping[str, Any]]) -> str: ...
     @staticmethod
     def table1(agents: Sequence[Mapping[str, Any]]) -> List[Dict[str, Any]]: ...
     @staticmethod

@@ -1,6 +1,7 @@
-"""Paper Fig. 5 and Table 1 from run folders.
+"""Paper Fig. 5, Table 1 and pictures of the gait from run folders.
 
-    python -m esrl_rs.report RUN_DIR [RUN_DIR ...] --out DIR
+    python -m esrl_rs.report RUN_DIR [RUN_DIR ...] --out DIR [--gif] [--episode K]
+    python -m esrl_rs.report --gait RUN_DIR/best --out DIR     # gait pictures of one policy
 
 Runs are grouped by agent (``config.toml`` key ``agent``). Writes to ``DIR``:
 
@@ -11,7 +12,14 @@ Runs are grouped by agent (``config.toml`` key ``agent``). Writes to ``DIR``:
 - ``fig5d_power_per_actuator.png``: mean |power| per actuator, mean ± SD across seeds (needs
   ``eval.json``);
 - ``fig5.png``: the four panels together;
-- ``table1.md`` (Table 1 and the per-actuator table, Markdown) and ``table1.csv``.
+- ``table1.md`` (Table 1, the per-actuator and the per-joint tables, Markdown) and
+  ``table1.csv``;
+- ``gait/<run>/``, for every run whose ``eval.json`` has the per-step trace of ``esrl eval``
+  (:func:`render_gait`, episode ``--episode``, default 0): ``gait_diagram.png`` (left/right
+  foot contact over time, as in biomechanics papers), ``joint_angles.png`` (hip, knee and
+  ankle angles over time and over the gait cycle, with the joint limits),
+  ``stick_filmstrip.png`` (the robot's side view every 0.3 s) and, with ``--gif``,
+  ``stick.gif`` (the side view animated in real time).
 
 A panel without data is left out with a note (printed, and listed in ``table1.md``). The
 numbers come from ``esrl-metrics`` through the bindings: the per-seed summaries are computed
@@ -35,18 +43,24 @@ import numpy as np
 
 from . import metrics
 from ._native import EsrlError
+from .gait import load_episode, render_gait
 from .run import Run, group_by_agent, load_run
 
 __all__ = [
     "AGENT_COLORS",
     "AGENT_ORDER",
+    "GAIT_FIGURES",
     "Report",
     "agent_color",
     "agent_label",
     "agent_runs",
     "main",
+    "render_gait",
     "render_report",
 ]
+
+#: The PNG files of :func:`render_gait` (``stick.gif`` comes on request).
+GAIT_FIGURES: Tuple[str, ...] = ("gait_diagram.png", "joint_angles.png", "stick_filmstrip.png")
 
 #: The paper's agent order (Table 1, Fig. 5).
 AGENT_ORDER: Tuple[str, ...] = ("es-sac", "es-td3", "es-ddpg", "sac", "td3", "ddpg")
@@ -269,11 +283,23 @@ class Report:
     agents: Dict[str, List[Path]] = field(default_factory=dict)
 
 
+def _gait_dir_name(run: Run, taken: Sequence[str]) -> str:
+    name = f"{run.agent}-s{run.seed}" if run.seed is not None else run.path.name
+    base, k = name, 1
+    while name in taken:
+        k += 1
+        name = f"{base}-{k}"
+    return name
+
+
 def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
-                  out: Union[str, "os.PathLike[str]"], dpi: int = 150) -> Report:
-    """Renders Fig. 5 (a–d) and Table 1 for ``run_dirs`` into ``out`` (created if needed).
-    Raises the loaders' exceptions for a bad run folder and ``ValueError`` when there is
-    nothing to report."""
+                  out: Union[str, "os.PathLike[str]"], dpi: int = 150, gait: bool = True,
+                  episode: int = 0, gif: bool = False, start: float = 0.0) -> Report:
+    """Renders Fig. 5 (a–d) and Table 1 for ``run_dirs`` into ``out`` (created if needed),
+    and with ``gait`` the gait pictures (:func:`render_gait`) of episode ``episode`` of every
+    run whose ``eval.json`` has the per-step trace into ``out/gait/<agent>-s<seed>/``. Raises
+    the loaders' exceptions for a bad run folder and ``ValueError`` when there is nothing to
+    report."""
     from matplotlib.figure import Figure  # no pyplot: no GUI backend, no global state
 
     if not run_dirs:
@@ -321,6 +347,9 @@ def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
     if any(r["actuator_names"] for r in rows):
         md += ["## Mean |torque| and |power| per actuator (Fig. 5d)", "",
                metrics.actuator_markdown(agents)]
+    if any(r.get("joint_names") for r in rows):
+        md += ["## Range of motion (5th–95th percentile) and time within 1° of a limit", "",
+               metrics.joint_markdown(agents)]
     md += ["## Runs", ""]
     for agent, runs_of in groups.items():
         for r in runs_of:
@@ -333,6 +362,28 @@ def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
     table_csv = out_dir / "table1.csv"
     table_csv.write_text(metrics.table1_csv(agents), encoding="utf-8")
     report.files += [table_md, table_csv]
+    if gait:
+        taken: List[str] = []
+        for members in groups.values():
+            for r in members:
+                if not r.has_eval:
+                    continue
+                try:
+                    load_episode(r.eval, episode)
+                except ValueError as e:
+                    report.notes.append(f"gait pictures of {r.path} skipped: {e}")
+                    continue
+                name = _gait_dir_name(r, taken)
+                taken.append(name)
+                report.files += render_gait(r.eval, out_dir / "gait" / name, episode=episode,
+                                            dpi=min(dpi, 120), gif=gif, start=start)
+        if report.notes and table_md.is_file():
+            text = table_md.read_text(encoding="utf-8")
+            if "## Notes" not in text:
+                text += "\n## Notes\n\n"
+            extra = [f"- {n}" for n in report.notes if f"- {n}" not in text]
+            table_md.write_text(text + "\n".join(extra) + ("\n" if extra else ""),
+                                encoding="utf-8")
     return report
 
 
@@ -340,14 +391,37 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """Command line entry point; returns the exit status."""
     parser = argparse.ArgumentParser(
         prog="python -m esrl_rs.report",
-        description="Paper Fig. 5 (a-d) as PNG and Table 1 as Markdown/CSV from esrl run "
+        description="Paper Fig. 5 (a-d) as PNG, Table 1 as Markdown/CSV and gait pictures "
+                    "(gait diagram, joint angles, side-view filmstrip) from esrl run "
                     "folders, grouped by agent.")
-    parser.add_argument("runs", nargs="+", metavar="RUN_DIR", help="run folders")
+    parser.add_argument("runs", nargs="*", metavar="RUN_DIR", help="run folders")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder")
     parser.add_argument("--dpi", type=int, default=150, help="PNG resolution (default 150)")
+    parser.add_argument("--gait", action="append", default=[], metavar="PATH",
+                        help="only the gait pictures of this run folder, RUN/best or "
+                             "eval.json (repeatable), into DIR/gait/<name>/")
+    parser.add_argument("--episode", type=int, default=0,
+                        help="evaluation episode of the gait pictures (default 0)")
+    parser.add_argument("--gif", action="store_true",
+                        help="also an animated side view, stick.gif (first 10 s)")
+    parser.add_argument("--start", type=float, default=0.0, metavar="S",
+                        help="gait pictures from this time (s) of the episode (default 0)")
     args = parser.parse_args(argv)
+    if not args.runs and not args.gait:
+        parser.error("give run folders or --gait PATH")
     try:
-        report = render_report(args.runs, args.out, dpi=args.dpi)
+        if args.runs:
+            report = render_report(args.runs, args.out, dpi=args.dpi, episode=args.episode,
+                                   gif=args.gif, start=args.start)
+        else:
+            report = Report(out=Path(args.out))
+        for path in args.gait:
+            p = Path(path)
+            name = p.parent.name + "-best" if p.name == "best" else (
+                p.parent.name if p.is_file() else p.name)
+            report.files += render_gait(p, Path(args.out) / "gait" / name,
+                                        episode=args.episode, dpi=min(args.dpi, 120),
+                                        gif=args.gif, start=args.start)
     except (EsrlError, OSError, ValueError, KeyError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
