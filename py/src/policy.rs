@@ -41,7 +41,10 @@ fn check_exists(path: &Path) -> PyResult<()> {
             path.display()
         )));
     }
-    if path.join("config.toml").is_file() && esrl::checkpoint::find(path).is_none() {
+    // A run folder (a checkpoint folder also keeps a copy of config.toml, beside its weights).
+    let run_folder =
+        path.join("config.toml").is_file() && !path.join("agent.safetensors").is_file();
+    if run_folder && esrl::checkpoint::find(path).is_none() {
         return Err(not_found(format!(
             "{} has no complete checkpoint (checkpoint/ with state.json and agent.safetensors): \
              the run did not reach its first checkpoint",

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -148,3 +149,26 @@ def test_colours_follow_the_paper() -> None:
     assert report.agent_color("ES_TD3") == (0.8500, 0.3250, 0.0980)
     assert report.agent_color("mystery", 3) == "C3"
     assert report.agent_label("es-ddpg") == "ES-DDPG"
+
+
+def test_report_refuses_to_pool_different_configurations(tmp_path: Path) -> None:
+    from conftest import write_run
+    runs = [write_run(tmp_path / f"td3-s{s}", "td3", s, [float(s + i) for i in range(10)])
+            for s in (0, 1)]
+    cfg = runs[1] / "config.toml"
+    cfg.write_text(cfg.read_text(encoding="utf-8").replace("sigma = 0.25", "sigma = 0.01")
+                   .replace('preset = "smoke"', 'preset = "quick"'), encoding="utf-8")
+    summary = json.loads((runs[1] / "summary.json").read_text(encoding="utf-8"))
+    summary["finished"] = False
+    (runs[1] / "summary.json").write_text(json.dumps(summary), encoding="utf-8")
+    args = [sys.executable, "-m", "esrl_rs.report", *map(str, runs), "--out",
+            str(tmp_path / "out"), "--dpi", "60"]
+    proc = subprocess.run(args, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 1
+    assert "differ in configuration" in proc.stderr, proc.stderr
+    assert "es.sigma: 0.25 (td3-s0), 0.01 (td3-s1)" in proc.stderr, proc.stderr
+    assert "preset" in proc.stderr
+    proc = subprocess.run(args + ["--mixed"], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "pools runs of different configurations" in proc.stdout
+    assert "td3-s1 is unfinished" in proc.stdout

@@ -292,25 +292,85 @@ def _gait_dir_name(run: Run, taken: Sequence[str]) -> str:
     return name
 
 
+#: Config keys that may differ between the seeds of one agent: the seed itself, how the run
+#: was executed, and the budget (a difference in budget is noted, not refused).
+_FREE_KEYS = ("seed", "threads", "checkpoint_every")
+_BUDGET_KEYS = ("generations", "episodes", "max_env_steps")
+
+
+def _flatten(config: Dict[str, Any], prefix: str = "") -> Dict[str, Any]:
+    flat: Dict[str, Any] = {}
+    for key, value in config.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            flat.update(_flatten(value, name + "."))
+        else:
+            flat[name] = value
+    return flat
+
+
+def config_differences(runs: Sequence[Run]) -> Tuple[List[str], List[str]]:
+    """What differs between the configs of ``runs`` (seeds of one agent): the settings that
+    make them different experiments, and the budget keys. Each entry reads
+    ``key: value (run), value (run)``."""
+    flats = [_flatten(r.config) for r in runs]
+    keys = sorted(set().union(*flats)) if flats else []
+    settings: List[str] = []
+    budget: List[str] = []
+    for key in keys:
+        if key in _FREE_KEYS:
+            continue
+        values = [f.get(key) for f in flats]
+        if all(v == values[0] for v in values):
+            continue
+        listed = ", ".join(f"{v!r} ({r.path.name})" for v, r in zip(values, runs))
+        (budget if key in _BUDGET_KEYS else settings).append(f"{key}: {listed}")
+    return settings, budget
+
+
 def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
                   out: Union[str, "os.PathLike[str]"], dpi: int = 150, gait: bool = True,
-                  episode: int = 0, gif: bool = False, start: float = 0.0) -> Report:
+                  episode: int = 0, gif: bool = False, start: float = 0.0,
+                  mixed: bool = False) -> Report:
     """Renders Fig. 5 (a–d) and Table 1 for ``run_dirs`` into ``out`` (created if needed),
     and with ``gait`` the gait pictures (:func:`render_gait`) of episode ``episode`` of every
     run whose ``eval.json`` has the per-step trace into ``out/gait/<agent>-s<seed>/``. Raises
     the loaders' exceptions for a bad run folder and ``ValueError`` when there is nothing to
-    report."""
+    report.
+
+    The runs of one agent are pooled as seeds of one experiment, so their configurations
+    must agree but for the seed, the threads and the budget: otherwise ``ValueError`` lists
+    the differences, unless ``mixed`` (then they are pooled and the differences noted).
+    Budget differences and unfinished runs are noted in ``Report.notes`` and ``table1.md``."""
     from matplotlib.figure import Figure  # no pyplot: no GUI backend, no global state
 
     if not run_dirs:
         raise ValueError("no run folders given")
     runs = [load_run(p) for p in run_dirs]
     groups = _ordered(group_by_agent(runs))
+    notes: List[str] = []
+    for agent, members in groups.items():
+        settings, budget = config_differences(members)
+        if settings and not mixed:
+            raise ValueError(
+                f"the {agent_label(agent)} runs differ in configuration, so they are not seeds "
+                "of one experiment: " + "; ".join(settings)
+                + ". Report them separately, or pass --mixed to pool them anyway")
+        if settings:
+            notes.append(f"{agent_label(agent)} pools runs of different configurations: "
+                         + "; ".join(settings))
+        if budget:
+            notes.append(f"{agent_label(agent)} pools runs of different budgets: "
+                         + "; ".join(budget))
+        for r in members:
+            if r.summary and r.summary.get("finished") is False:
+                notes.append(f"{r.path} is unfinished ({len(r)} rows so far)")
     agents = agent_runs(groups)
     rows = metrics.table1(agents)
     out_dir = Path(out)
     out_dir.mkdir(parents=True, exist_ok=True)
     report = Report(out=out_dir, agents={a: [r.path for r in rs] for a, rs in groups.items()})
+    report.notes.extend(notes)
     for agent, members in groups.items():
         envs = sorted({str(r.env) for r in members})
         if len(envs) > 1:
@@ -406,13 +466,16 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="also an animated side view, stick.gif (first 10 s)")
     parser.add_argument("--start", type=float, default=0.0, metavar="S",
                         help="gait pictures from this time (s) of the episode (default 0)")
+    parser.add_argument("--mixed", action="store_true",
+                        help="pool runs of one agent even when their configurations differ "
+                             "(by default that is refused, listing the differences)")
     args = parser.parse_args(argv)
     if not args.runs and not args.gait:
         parser.error("give run folders or --gait PATH")
     try:
         if args.runs:
             report = render_report(args.runs, args.out, dpi=args.dpi, episode=args.episode,
-                                   gif=args.gif, start=args.start)
+                                   gif=args.gif, start=args.start, mixed=args.mixed)
         else:
             report = Report(out=Path(args.out))
         for path in args.gait:
