@@ -1,5 +1,5 @@
 //! Throughput of the walking environment on one core (`esrl bench env`), and the rigid-stance
-//! creep measurement behind the physics default (crate docs, "Physics step").
+//! creep measurement behind the physics default (crate docs, "Physics step and joint limits").
 
 use std::time::Instant;
 

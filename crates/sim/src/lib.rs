@@ -131,34 +131,50 @@
 //!
 //! **Throughput.** `esrl bench env` (random actions, resets included) side by side with
 //! MuJoCo stepping the same URDF at 5 ms × 5 per control step
-//! (`python ../shared/peers/mujoco_urdf.py assets/humanoid.urdf`), alternating, pinned to the
-//! same core, with other jobs on the 2-core machine: esrl 3.1–4.1k control steps/s, MuJoCo
-//! 5.5–6.3k, ratio 0.55–0.75 (0.61 on the means); the former default (1 × 16, `hard`) 1.2k.
-//! Unloaded, MuJoCo runs ≈ 10.8–11.3k here, which puts the default near 6.5k. Where a control
-//! step's 2.25 M instructions go (callgrind, default settings, inclusive, so the rows
-//! overlap): Rapier's reduced-coordinate multibody dynamics dominate, every Rapier step:
-//! assembling the 16 × 16 joint-space mass matrix (`Multibody::update_mass_matrix`, dense
-//! nalgebra `quadform` and `gemm` per link, twice: with and without gyroscopic terms) 58 %,
-//! its two LU factorisations and the solves against them (joint-limit and contact rows
-//! each solve `M⁻¹Jᵀ`) 11 %, forward kinematics 8 %, link Jacobians 5 %, accelerations 4 %;
-//! building the contact constraints 6 %, the solver's sweeps over all constraints 2 %;
-//! collision detection 3 %;
-//! everything of this crate (torques, fade, observation, reward) 1 %; resets (a new world per
-//! episode, about every 22 steps under random actions) 1 %. The cost is linear in the Rapier
-//! steps (0.56 M instructions each); 5k steps/s on this machine's loaded cores would need
-//! fewer than 4 of them, which the joint limits do not allow (table), or a cheaper mass
-//! matrix inside Rapier.
+//! (`python ../shared/peers/mujoco_urdf.py assets/humanoid.urdf`), on a 2-core machine shared
+//! with other builds and trainings (load average 5–7), both pinned to the same core:
 //!
-//! (The same example's standing test and `cargo run --release -p esrl-sim --example
-//! bench_env -- STEPS SUBSTEPS ITERATIONS [hard|fade|soft] [torque|target]` reproduce single
-//! rows; `target` mode costs 2.34 M instructions per control step.)
+//! - wall clock, alternating runs: esrl 3.1–4.1k control steps/s, MuJoCo 5.5–6.3k, ratio
+//!   0.55–0.75 (0.61 on the means); the former default (1 × 16, `hard`) 1.2k;
+//! - CPU time (`perf stat -e task-clock`, long run minus short run, so start-up and
+//!   descheduling drop out; three alternating rounds): esrl 4.8k control steps per CPU-second,
+//!   MuJoCo 8.4–8.5k, ratio 0.57 in every round;
+//! - instructions (callgrind): esrl 2.25 M per control step, MuJoCo 0.82 M (0.79 M in
+//!   `mj_step`, the rest the Python loop). MuJoCo retires fewer instructions per step but at a
+//!   lower rate, so the instruction ratio (0.37) understates esrl's speed.
+//!
+//! MuJoCo runs 10.8–11.3k steps/s on an idle core of this kind of machine
+//! (`../shared/peers/README.md`); at the measured ratio that puts esrl near 6k there, while
+//! this shared machine gave 4.8k per CPU-second. Where a control step's 2.25 M instructions go
+//! (callgrind, default settings, inclusive, so the rows overlap): Rapier's reduced-coordinate
+//! multibody dynamics dominate, every Rapier step: assembling the 16 × 16 joint-space mass
+//! matrix (`Multibody::update_mass_matrix`, dense nalgebra `quadform` and `gemm` per link,
+//! twice: with and without gyroscopic terms) 58 %, its two LU factorisations and the solves
+//! against them (joint-limit and contact rows each solve `M⁻¹Jᵀ`) 11 %, forward kinematics
+//! 8 %, link Jacobians 5 %, accelerations 4 %; building the contact constraints 6 %, the
+//! solver's sweeps over all constraints 2 %; collision detection 3 %, continuous collision
+//! detection 1.5 %; everything of this crate (torques, fade, observation, reward) 1 %;
+//! resets (a new world per episode, about every 22 steps under random actions) 1 %. The cost
+//! is linear in the Rapier steps (0.56 M instructions each), and 70–80 % of it is Rapier's
+//! multibody dynamics, which this crate cannot change: 5k steps/s per CPU-second on this
+//! machine's shared cores would need fewer than 4 Rapier steps, which the joint limits do not
+//! allow (table), or a cheaper mass matrix inside Rapier.
+//!
+//! (`cargo run --release -p esrl-sim --example bench_env -- STEPS SUBSTEPS ITERATIONS
+//! [hard|fade|soft] [torque|target]` times single settings; `target` mode costs 2.34 M
+//! instructions per control step.)
 //!
 //! The armature: a joint that reaches a limit at speed `v` overshoots by about `v·h`, and one
 //! pushed into it by torque `τ` through inertia `I` chatters by about `½(τ/I)h²`. The foot is
 //! the worst case: 1 kg with 0.012 kg·m² about the ankle against 120 N·m. A reflected actuator
 //! inertia (MuJoCo's `armature`, standard for geared actuators and used by MuJoCo's humanoids)
-//! of 0.1 kg·m² on the actuated joints keeps it within the bounds above; the `quick` preset
-//! uses 0.5. Set [`PhysicsConfig::actuator_armature`] to 0 for none.
+//! of 0.1 kg·m² on the actuated joints keeps it within the bounds above. The `quick` preset
+//! uses 0.5 (a 40 Hz torque loop balances the body more easily: `examples/pd_stand.rs` stands
+//! 60 s for 6 of 30 PD gain pairs at 0.5, 1 at 0.1, at the default physics as before): its
+//! limit-pressing stances fall too (`tests/rigid_stance.rs` runs both), but the heavier hip
+//! swung at full effort is seen 6.4° past its limit at control rate (peak 8.9° between; 4.5°
+//! at 5 Rapier steps), just over the 6° the default meets. Set
+//! [`PhysicsConfig::actuator_armature`] to 0 for none.
 //!
 //! # Standing
 //!

@@ -10,7 +10,7 @@ use crate::error::{SimError, UrdfError};
 use crate::math::{self, Iso};
 use crate::model::{JointKind, LinkPose, RobotModel, Shape};
 
-/// How a joint behaves at the ends of its range (crate docs, "Joint limits").
+/// How a joint behaves at the ends of its range (crate docs, "Physics step and joint limits").
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum LimitModel {
@@ -25,7 +25,7 @@ pub enum LimitModel {
     /// a limit are untouched. An actuator cannot press a joint into its stop; loads from the
     /// rest of the body still rest on it. Evaluated once per Rapier step, the fade is a
     /// sampled spring of stiffness `|τ|/band`: it needs Rapier steps of a few milliseconds
-    /// (crate docs, "Joint limits").
+    /// (crate docs, "Physics step and joint limits").
     Fade,
     /// No rigid stop: the limit is a one-sided implicit spring-damper acting past the limit
     /// (Rapier's soft constraint, natural frequency [`PhysicsConfig::limit_frequency`] and
@@ -44,13 +44,13 @@ pub enum LimitModel {
 #[serde(default, deny_unknown_fields)]
 pub struct PhysicsConfig {
     /// Rapier steps per control period; the physics step is `control_period / substeps`.
-    /// Default 4, a physics step of 6.25 ms (crate docs "Physics step": the `fade` limits act
-    /// once per Rapier step and need steps this short; fewer let joints overshoot their
-    /// limits by more than 6°).
+    /// Default 4, a physics step of 6.25 ms (crate docs, "Physics step and joint limits":
+    /// the `fade` limits act once per Rapier step and need steps this short; with fewer,
+    /// joints are seen more than 6° past their limits).
     pub substeps: u32,
     /// Rapier `num_solver_iterations`. In Rapier 0.36 each iteration is also an integration
-    /// substep of `dt / solver_iterations`. Default 1 (crate docs "Physics step": with four
-    /// Rapier steps per control period one iteration each is enough).
+    /// substep of `dt / solver_iterations`. Default 1 (crate docs, "Physics step and joint
+    /// limits": with four Rapier steps per control period one iteration each is enough).
     pub solver_iterations: u32,
     /// Gravitational acceleration, m/s², along −z. Default 9.81 (standard gravity).
     pub gravity: f32,
@@ -58,21 +58,24 @@ pub struct PhysicsConfig {
     /// Default 1.0 (SPEC §2: "flat, friction about 1").
     pub friction: f32,
     /// Armature (reflected actuator inertia, kg·m², MuJoCo's `armature`) that `WalkEnv` adds
-    /// to each torque-controlled joint. Default 0.1: see the crate docs ("Joint limits").
+    /// to each torque-controlled joint. Default 0.1: see the crate docs ("Physics step and
+    /// joint limits").
     pub actuator_armature: f32,
     /// Whether links of the robot collide with each other. Default false: with sagittal
     /// legs and limited shoulders the segments cannot meet in a meaningful way, and the
     /// paper's Simscape model only has foot/body–ground contact.
     pub self_collisions: bool,
     /// How joint limits act: `hard`, `fade` or `soft` ([`LimitModel`]). Default `fade`
-    /// (crate docs, "Joint limits": the cheapest model that passes the limit-pressing test).
+    /// (crate docs, "Physics step and joint limits": the cheapest model that passes the
+    /// physics tests, the limit-pressing one included).
     pub joint_limits: LimitModel,
     /// `fade`: width of the band before a limit over which a torque pushing into it fades
     /// to zero, rad. Default 2° = 0.0349 (`notes/walking-probes.md`: removes the chatter and
     /// the active pressing at 4 solver iterations).
     pub limit_band: f32,
     /// `soft`: natural frequency of the limit spring about the joint's effective inertia, Hz.
-    /// Default 20 (crate docs, "Joint limits").
+    /// Default 20 (our choice, between Rapier's rigid 10⁶ Hz and a limit that sags under the
+    /// body's weight; the crate docs' table measures it).
     pub limit_frequency: f32,
     /// `soft`: damping ratio of the limit spring. Default 1 (critical).
     pub limit_damping_ratio: f32,

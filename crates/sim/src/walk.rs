@@ -53,7 +53,7 @@
 //! - **`action = "torque"`** (default, the paper's): joint torque `τ = a·τmax`, `τmax` the
 //!   joint's URDF `<limit effort>`, commanded for the whole control period and passed through
 //!   the joint-limit model ([`PhysicsConfig::joint_limits`](crate::PhysicsConfig); crate docs,
-//!   "Joint limits").
+//!   "Physics step and joint limits").
 //! - **`action = "target"`**: a joint angle target `q*`, tracked by a position servo that
 //!   Rapier integrates inside its solver at every physics substep (a `ForceBased` motor:
 //!   `τ = clamp(kp·(q* − q) − kd·q̇, ±τmax)`, implicit, so stable at any gain), as MATLAB's
