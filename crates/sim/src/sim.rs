@@ -699,8 +699,8 @@ impl RobotSim {
     /// parent links, `a` the joint axis in the world at the start of the step. Rapier maps link
     /// wrenches to generalised forces through the link Jacobians: the pair contributes exactly
     /// `τ` to the joint's own coordinate and cancels on every other one. Under
-    /// [`LimitModel::Fade`] a limited joint's torque goes in as the fade motor instead (see
-    /// there); far from the limit the motor saturates at exactly `τ`.
+    /// [`LimitModel::Fade`] the torque is first scaled by [`Self::limit_factor`] at the
+    /// joint's position at the start of the step.
     pub fn step(&mut self) {
         for &h in &self.bodies {
             if let Some(rb) = self.world.bodies.get_mut(h) {
@@ -736,10 +736,10 @@ impl RobotSim {
             }
         }
         if !self.broken {
-            // Rapier's motor constraint clamps with the joint position, which panics once a
-            // state has blown up to NaN (absurd models, e.g. a link 1e30 m away). Such a world
-            // is lost anyway: it is marked broken, reads NaN from then on, and the
-            // environment ends the episode as a fall.
+            // Rapier's motor constraint (the servos of `set_joint_motor`) clamps with the
+            // joint position, which panics once a state has blown up to NaN (absurd models,
+            // e.g. a link 1e30 m away). Such a world is lost anyway: it is marked broken,
+            // reads NaN from then on, and the environment ends the episode as a fall.
             let world = &mut self.world;
             let stepped =
                 std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| world.step())).is_ok();

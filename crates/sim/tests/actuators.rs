@@ -6,7 +6,9 @@
 //!   rest where `τ·d/band = m g l sin q`, inside the band, off the stop;
 //! - the position servo (`target` action mode): holds `q*` against gravity with the static
 //!   error `m g l sin q / kp`, and its torque is clamped to its maximum;
-//! - `RobotSim::delivered_torque` reports those torques.
+//! - `RobotSim::delivered_torque` reports those torques;
+//! - servos in a state that blows up to NaN within a step do not panic it (Rapier's motor
+//!   clamps with the joint position): the world is marked broken and reads NaN.
 
 use std::sync::Arc;
 
@@ -188,4 +190,38 @@ fn servo_torque_is_clamped_to_its_maximum() {
     let q = sim.joint_position(0) as f64;
     assert!((q - q_eq).abs() < 1e-3, "at {q:.5}, expected {q_eq:.5}");
     assert!(((sim.delivered_torque(0) as f64) - max).abs() < 1e-3);
+}
+
+#[test]
+fn a_servo_in_a_blown_up_state_marks_the_world_broken_instead_of_panicking() {
+    // Joint speeds of 1e30 rad/s turn the state into NaN within a solver substep; with several
+    // substeps per Rapier step the servos' motor constraints then meet a NaN joint position,
+    // on which Rapier panics.
+    let model = Arc::new(RobotModel::humanoid().unwrap());
+    let n = model.joints().len();
+    let setup = SimSetup {
+        dt: 0.025,
+        physics: PhysicsConfig {
+            substeps: 1,
+            solver_iterations: 4,
+            ..PhysicsConfig::default()
+        },
+        base: Base::Floating,
+        ground: true,
+        armature: vec![],
+    };
+    let state = RobotState {
+        base_position: [0.0, 0.0, 1.2],
+        q: vec![0.0; n],
+        qd: vec![1e30; n],
+    };
+    let mut sim = RobotSim::new(model, &setup, &state).unwrap();
+    for j in 0..n {
+        sim.set_joint_motor(j, 0.2, 1500.0, 60.0, 100.0);
+    }
+    sim.step();
+    assert!(sim.is_broken());
+    assert!(sim.joint_position(0).is_nan());
+    sim.step();
+    assert!(sim.is_broken());
 }
