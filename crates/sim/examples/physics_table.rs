@@ -7,7 +7,7 @@
 //! mean hip/knee speed while they stand); and the throughput with random actions.
 //!
 //! `cargo run --release -p esrl-sim --example physics_table` runs the documented rows;
-//! `-- MODEL SUBSTEPS ITERATIONS` (e.g. `-- fade 4 1`) runs one.
+//! `-- MODEL SUBSTEPS ITERATIONS [BAND_DEGREES]` (e.g. `-- fade 4 1 1`) runs one.
 
 use std::sync::Arc;
 
@@ -165,8 +165,11 @@ fn pressing(config: WalkConfig) -> (usize, usize, f32, f32) {
     (up, total, worst, speed)
 }
 
-fn row(model: LimitModel, substeps: u32, iterations: u32) {
-    let c = config(model, substeps, iterations);
+fn row(model: LimitModel, substeps: u32, iterations: u32, band: Option<f32>) {
+    let mut c = config(model, substeps, iterations);
+    if let Some(b) = band {
+        c.physics.limit_band = b.to_radians();
+    }
     let drift = standing(c.clone()).map_or("fell".to_owned(), |d| format!("{:.1} cm", d * 100.0));
     let (over, peak, held) = limits(c.clone());
     let (up, total, travel, speed) = pressing(c.clone());
@@ -198,7 +201,7 @@ fn main() {
             }
         };
         let n = |i: usize| args[i].parse::<u32>().unwrap_or(1);
-        row(model, n(1), n(2));
+        row(model, n(1), n(2), args.get(3).and_then(|b| b.parse().ok()));
         return;
     }
     for (model, substeps, iterations) in [
@@ -213,7 +216,7 @@ fn main() {
         (LimitModel::Fade, 8, 1),
         (LimitModel::Soft, 4, 1),
     ] {
-        row(model, substeps, iterations);
+        row(model, substeps, iterations, None);
     }
     let env = WalkEnv::new(WalkConfig::default()).unwrap();
     println!("obs_dim {}", env.obs_dim());

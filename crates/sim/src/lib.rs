@@ -67,9 +67,13 @@
 //!   joint next to its stop against a load (and pays for it in torque, `reward.torque_sq`),
 //!   but it cannot press the joint into the stop. A load from the rest of the body (gravity
 //!   on a straight knee, the torso leaning on its hips) still rests on the rigid stop for free,
-//!   as on a real joint's end stop or ligament. The 2° band is the probe's
-//!   (`notes/walking-probes.md`); `tests/actuators.rs` checks the law on a pendulum (rest
-//!   where `τ·d/band = m g l sin q`, off the stop, where `hard` rests on it).
+//!   as on a real joint's end stop or ligament. The 2° band (the probe's,
+//!   `notes/walking-probes.md`) is the narrowest that passes at the default step: at 1° the
+//!   stiffer fade (`τ/band`, sampled every 6.25 ms) lets joints be seen 7.8° past their limits
+//!   and 2 of the 30 pressing stances stay up (0.37 m); 4° passes too (5.0°, held 2.5°) but
+//!   takes torque away over a fifth of the ankle's ±20° range. `tests/actuators.rs` checks
+//!   the law on a pendulum (rest where `τ·d/band = m g l sin q`, off the stop, where `hard`
+//!   rests on it).
 //! - `soft`: no rigid stop; Rapier's limit constraint made compliant (natural frequency 20 Hz,
 //!   damping ratio 1 about the joint's effective inertia), a one-sided implicit spring-damper
 //!   past the limit as Simscape models joint limits. Torques unchanged.

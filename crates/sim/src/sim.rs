@@ -70,8 +70,8 @@ pub struct PhysicsConfig {
     /// physics tests, the limit-pressing one included).
     pub joint_limits: LimitModel,
     /// `fade`: width of the band before a limit over which a torque pushing into it fades
-    /// to zero, rad. Default 2° = 0.0349 (`notes/walking-probes.md`: removes the chatter and
-    /// the active pressing at 4 solver iterations).
+    /// to zero, rad. Default 2° = 0.0349 (`notes/walking-probes.md`; the narrowest that keeps
+    /// joints within 6° of their limits at the default step, crate docs).
     pub limit_band: f32,
     /// `soft`: natural frequency of the limit spring about the joint's effective inertia, Hz.
     /// Default 20 (our choice, between Rapier's rigid 10⁶ Hz and a limit that sags under the
