@@ -138,18 +138,19 @@
 //! (`python ../shared/peers/mujoco_urdf.py assets/humanoid.urdf`), on a 2-core machine shared
 //! with other builds and trainings (load average 5–7), both pinned to the same core:
 //!
-//! - wall clock, alternating runs: esrl 3.1–4.1k control steps/s, MuJoCo 5.5–6.3k, ratio
-//!   0.55–0.75 (0.61 on the means); the former default (1 × 16, `hard`) 1.2k;
+//! - wall clock, alternating runs: at load average 6–7, esrl 3.1–4.1k control steps/s,
+//!   MuJoCo 5.5–6.3k (0.61 on the means), the former default (1 × 16, `hard`) 1.2k; at load
+//!   average 4–5, esrl 4.5–4.7k, MuJoCo 8.3–8.4k (0.54–0.56);
 //! - CPU time (`perf stat -e task-clock`, long run minus short run, so start-up and
-//!   descheduling drop out; three alternating rounds): esrl 4.8k control steps per CPU-second,
-//!   MuJoCo 8.4–8.5k, ratio 0.57 in every round;
+//!   descheduling drop out; five alternating rounds in two sessions): esrl 4.8–4.9k control
+//!   steps per CPU-second, MuJoCo 8.3–8.8k, ratio 0.56–0.59;
 //! - instructions (callgrind): esrl 2.25 M per control step, MuJoCo 0.82 M (0.79 M in
 //!   `mj_step`, the rest the Python loop). MuJoCo retires fewer instructions per step but at a
 //!   lower rate, so the instruction ratio (0.37) understates esrl's speed.
 //!
 //! MuJoCo runs 10.8–11.3k steps/s on an idle core of this kind of machine
 //! (`../shared/peers/README.md`); at the measured ratio that puts esrl near 6k there, while
-//! this shared machine gave 4.8k per CPU-second. Where a control step's 2.25 M instructions go
+//! this shared machine gave 4.8–4.9k per CPU-second. Where a control step's 2.25 M instructions go
 //! (callgrind, default settings, inclusive, so the rows overlap): Rapier's reduced-coordinate
 //! multibody dynamics dominate, every Rapier step: assembling the 16 × 16 joint-space mass
 //! matrix (`Multibody::update_mass_matrix`, dense nalgebra `quadform` and `gemm` per link,
