@@ -97,7 +97,12 @@ impl TrainConfig {
                     // the O(1) observation (`walk.normalize_obs`; raw, their critic diverges).
                     // Armature 0.5 kg·m² (a geared actuator's reflected inertia) lets a 40 Hz
                     // torque loop balance the body (a sampled PD stands 60 s for 6 of 30 gain
-                    // pairs instead of 1): episodes grow from ~80 steps to ~600–1100. α₀ = 0.05
+                    // pairs instead of 1, also at the `fade`-limit physics of issue 15):
+                    // episodes grow from ~80 steps to ~600–1100. Its limit-pressing stances
+                    // fall as the default's do (`crates/sim/tests/rigid_stance.rs` runs both
+                    // armatures); a hip swung at full effort is seen 6.4° past its limit
+                    // instead of ≤ 6° (crate docs of `esrl-sim`, "Physics step and joint
+                    // limits"). α₀ = 0.05
                     // instead of 1 keeps the entropy term at the size of eq. 12's per-step
                     // rewards (0.025–1): with α₀ = 1 the critics' Q₀ runs to −60…−450.
                     c.network = NetConfig::feed_forward();

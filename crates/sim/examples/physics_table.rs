@@ -1,17 +1,26 @@
-//! Reproduces the "Physics step" table of the crate docs: for each solver-iteration count,
-//! the torso drift of the 60 s PD-standing test, the worst joint-limit overshoot of the
-//! joint-limit test (with and without actuator armature), the creep of a rigid stance, and the
-//! throughput with random actions. `cargo run --release -p esrl-sim --example physics_table`
+//! Reproduces the physics table of the crate docs: for each joint-limit model and step
+//! setting (Rapier steps per 25 ms control period × solver iterations per Rapier step), the
+//! torso drift of the 60 s PD-standing test; the worst joint-limit overshoot of the
+//! joint-limit test as seen once per control period and its peak between control periods,
+//! and the hold distance; the limit-pressing stance of `tests/rigid_stance.rs` (how many of
+//! the 30 stances, armature 0.1 and 0.5, stay up for 60 s, the worst travel of those, and the
+//! mean hip/knee speed while they stand); and the throughput with random actions.
+//!
+//! `cargo run --release -p esrl-sim --example physics_table` runs the documented rows;
+//! `-- MODEL SUBSTEPS ITERATIONS [BAND_DEGREES]` (e.g. `-- fade 4 1 1`) runs one.
 
 use std::sync::Arc;
 
-use esrl_sim::bench::{bench_walk, rigid_stance_travel};
-use esrl_sim::{Base, Env, RobotModel, RobotSim, RobotState, SimSetup, WalkConfig, WalkEnv};
+use esrl_sim::bench::bench_walk;
+use esrl_sim::{
+    Base, Env, LimitModel, RobotModel, RobotSim, RobotState, SimSetup, WalkConfig, WalkEnv,
+};
 
-fn config(iterations: u32, armature: f32) -> WalkConfig {
+fn config(model: LimitModel, substeps: u32, iterations: u32) -> WalkConfig {
     let mut c = WalkConfig::default();
+    c.physics.joint_limits = model;
+    c.physics.substeps = substeps;
     c.physics.solver_iterations = iterations;
-    c.physics.actuator_armature = armature;
     c
 }
 
@@ -36,9 +45,11 @@ fn standing(config: WalkConfig) -> Option<f32> {
     Some(drift)
 }
 
-/// Worst overshoot (degrees) of the actuated joints driven at full effort through full-range
-/// swings with the torso held in the air (the scenario of `tests/joint_limits.rs`).
-fn limits(config: WalkConfig) -> f64 {
+/// Worst overshoot past a limit seen once per control period, its peak over every Rapier
+/// step, and the worst distance from the limit while held (last 0.5 s of each 1.5 s phase,
+/// per control period), degrees, of the actuated joints driven at full effort through
+/// full-range swings with the torso held in the air (the scenario of `tests/joint_limits.rs`).
+fn limits(config: WalkConfig) -> (f64, f64, f64) {
     let model = Arc::new(RobotModel::humanoid().unwrap());
     let actuated: Vec<usize> = config
         .actuated_joints
@@ -53,7 +64,7 @@ fn limits(config: WalkConfig) -> f64 {
         q[j] = 0.5 * (lo + hi);
     }
     let setup = SimSetup {
-        dt: config.control_period,
+        dt: config.control_period / config.physics.substeps as f32,
         physics: config.physics.clone(),
         base: Base::Fixed,
         ground: false,
@@ -65,54 +76,147 @@ fn limits(config: WalkConfig) -> f64 {
         qd: vec![],
     };
     let mut sim = RobotSim::new(model.clone(), &setup, &state).unwrap();
-    let mut worst = 0.0f64;
+    let substeps = config.physics.substeps as usize;
+    let steps = (1.5 / config.control_period).round() as usize;
+    let hold_from = steps - (0.5 / config.control_period).round() as usize;
+    let (mut over, mut peak, mut held) = (0.0f64, 0.0f64, 0.0f64);
+    let past = |sim: &RobotSim, j: usize| {
+        let [lo, hi] = model.joints()[j].limits.unwrap();
+        let q = sim.joint_position(j) as f64;
+        (lo - q).max(q - hi).to_degrees()
+    };
     for direction in [-1.0f32, 1.0, -1.0] {
-        for _ in 0..60 {
+        for step in 0..steps {
             for &j in &actuated {
                 sim.set_joint_torque(j, direction * model.joints()[j].effort as f32);
             }
-            sim.step();
+            for _ in 0..substeps {
+                sim.step();
+                for &j in &actuated {
+                    peak = peak.max(past(&sim, j));
+                }
+            }
             for &j in &actuated {
-                let [lo, hi] = model.joints()[j].limits.unwrap();
-                let q = sim.joint_position(j) as f64;
-                worst = worst.max((lo - q).max(q - hi).to_degrees());
+                over = over.max(past(&sim, j));
+                if step >= hold_from {
+                    let [lo, hi] = model.joints()[j].limits.unwrap();
+                    let limit = if direction < 0.0 { lo } else { hi };
+                    let q = sim.joint_position(j) as f64;
+                    held = held.max((q - limit).abs().to_degrees());
+                }
             }
         }
     }
-    worst
+    (over, peak, held)
 }
 
-/// Creep of a rigid stance ([`rigid_stance_travel`]) with armature 0.5, the `quick`
-/// preset's: the largest travel over the stances (ankle actions × reset seeds) that stayed
-/// up, and how many did.
-fn creep(iterations: u32) -> (f32, usize) {
-    let mut env = WalkEnv::new(config(iterations, 0.5)).unwrap();
-    let (mut worst, mut upright) = (0.0f32, 0);
-    for seed in [1, 2, 3] {
-        for ankle in [-1.0f32, -0.6, -0.3] {
-            if let Some(d) = rigid_stance_travel(&mut env, seed, ankle) {
-                upright += 1;
-                worst = worst.max(d);
+/// The limit-pressing stance `[1, −1, ankle, 1, −1, ankle]` (hips into +30°, knees into 5°)
+/// for 60 s from several reset seeds and ankle actions, with actuator armature 0.1 and 0.5:
+/// (stances that stayed up, of how many; the worst horizontal travel from t = 1 s of those;
+/// the mean |q̇| of hips and knees over the upright stances' last 59 s).
+fn pressing(config: WalkConfig) -> (usize, usize, f32, f32) {
+    let (mut up, mut total, mut worst) = (0, 0, 0.0f32);
+    let (mut speed, mut samples) = (0.0f64, 0usize);
+    for (armature, seed) in [0.1f32, 0.5]
+        .into_iter()
+        .flat_map(|a| [1, 2, 3].map(|s| (a, s)))
+    {
+        let mut c = config.clone();
+        c.physics.actuator_armature = armature;
+        let mut env = WalkEnv::new(c).unwrap();
+        for ankle in [-1.0f32, -0.6, -0.3, 0.0, 0.5] {
+            total += 1;
+            env.reset(seed);
+            let action = [1.0, -1.0, ankle, 1.0, -1.0, ankle];
+            let (mut start, mut end) = ([0.0f32; 3], [0.0f32; 3]);
+            let (mut s_sum, mut n) = (0.0f64, 0usize);
+            let mut fell = false;
+            for step in 1..=2400 {
+                let s = env.step(&action);
+                let g = s.info.gait.as_ref().unwrap();
+                if step == 40 {
+                    start = g.torso_position;
+                }
+                end = g.torso_position;
+                if step > 40 {
+                    for k in [0, 1, 3, 4] {
+                        s_sum += g.joint_velocity[k].abs() as f64;
+                        n += 1;
+                    }
+                }
+                if s.terminated {
+                    fell = true;
+                    break;
+                }
+            }
+            if !fell {
+                up += 1;
+                worst = worst.max((end[0] - start[0]).hypot(end[1] - start[1]));
+                speed += s_sum;
+                samples += n;
             }
         }
     }
-    (worst, upright)
+    let speed = if samples > 0 {
+        (speed / samples as f64) as f32
+    } else {
+        f32::NAN
+    };
+    (up, total, worst, speed)
+}
+
+fn row(model: LimitModel, substeps: u32, iterations: u32, band: Option<f32>) {
+    let mut c = config(model, substeps, iterations);
+    if let Some(b) = band {
+        c.physics.limit_band = b.to_radians();
+    }
+    let drift = standing(c.clone()).map_or("fell".to_owned(), |d| format!("{:.1} cm", d * 100.0));
+    let (over, peak, held) = limits(c.clone());
+    let (up, total, travel, speed) = pressing(c.clone());
+    let bench = bench_walk(&c, 10_000, 0).unwrap();
+    let (travel, speed) = if up > 0 {
+        (format!("{travel:.2} m"), format!("{speed:.2} rad/s"))
+    } else {
+        ("–".to_owned(), "–".to_owned())
+    };
+    println!(
+        "| `{}` | {substeps} × {iterations} | {drift} | {over:.1}° | {peak:.1}° | {held:.1}° | {up} of {total} | {travel} | {speed} | {:.0} |",
+        format!("{model:?}").to_lowercase(),
+        bench.steps_per_s
+    );
 }
 
 fn main() {
-    println!("| solver iterations | standing drift | overshoot (armature 0.1) | overshoot (armature 0) | rigid-stance creep, 59 s | steps/s |");
-    println!("|---|---|---|---|---|---|");
-    for it in [1, 2, 3, 4, 8, 16, 32] {
-        let drift =
-            standing(config(it, 0.1)).map_or("fell".to_owned(), |d| format!("{:.1} cm", d * 100.0));
-        let bench = bench_walk(&config(it, 0.1), 10_000, 0).unwrap();
-        let (travel, upright) = creep(it);
-        println!(
-            "| {it} | {drift} | {:.1}° | {:.1}° | {travel:.2} m ({upright} of 9 upright) | {:.0} |",
-            limits(config(it, 0.1)),
-            limits(config(it, 0.0)),
-            bench.steps_per_s
-        );
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    println!("| limits | Rapier steps × iterations | 60 s PD standing, max drift | overshoot, per control step | overshoot, peak between | held | limit-pressing stances up 60 s | their worst travel, 59 s | their hip/knee speed | steps/s |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    if args.len() >= 3 {
+        let model = match args[0].as_str() {
+            "hard" => LimitModel::Hard,
+            "fade" => LimitModel::Fade,
+            "soft" => LimitModel::Soft,
+            other => {
+                eprintln!("unknown limit model `{other}` (hard, fade, soft)");
+                std::process::exit(2);
+            }
+        };
+        let n = |i: usize| args[i].parse::<u32>().unwrap_or(1);
+        row(model, n(1), n(2), args.get(3).and_then(|b| b.parse().ok()));
+        return;
+    }
+    for (model, substeps, iterations) in [
+        (LimitModel::Hard, 1, 16),
+        (LimitModel::Hard, 1, 4),
+        (LimitModel::Hard, 4, 1),
+        (LimitModel::Fade, 1, 4),
+        (LimitModel::Fade, 2, 1),
+        (LimitModel::Fade, 3, 1),
+        (LimitModel::Fade, 4, 1),
+        (LimitModel::Fade, 5, 1),
+        (LimitModel::Fade, 8, 1),
+        (LimitModel::Soft, 4, 1),
+    ] {
+        row(model, substeps, iterations, None);
     }
     let env = WalkEnv::new(WalkConfig::default()).unwrap();
     println!("obs_dim {}", env.obs_dim());

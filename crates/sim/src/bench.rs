@@ -1,5 +1,5 @@
 //! Throughput of the walking environment on one core (`esrl bench env`), and the rigid-stance
-//! creep measurement behind the physics default (crate docs, "Physics step").
+//! creep measurement behind the physics default (crate docs, "Physics step and joint limits").
 
 use std::time::Instant;
 
@@ -9,7 +9,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::env::Env;
 use crate::error::SimError;
-use crate::walk::{WalkConfig, WalkEnv};
+use crate::sim::LimitModel;
+use crate::walk::{ActionMode, WalkConfig, WalkEnv};
 
 /// What [`bench_walk`] measured.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -34,6 +35,10 @@ pub struct BenchReport {
     pub substeps: u32,
     /// Rapier solver iterations (each one an integration substep in Rapier 0.36).
     pub solver_iterations: u32,
+    /// Joint-limit model.
+    pub joint_limits: LimitModel,
+    /// Action mode.
+    pub action: ActionMode,
     /// Seed of the random actions and resets.
     pub seed: u64,
     /// Observation length.
@@ -83,6 +88,8 @@ pub fn bench_walk(config: &WalkConfig, steps: usize, seed: u64) -> Result<BenchR
         dt: config.control_period / config.physics.substeps as f32,
         substeps: config.physics.substeps,
         solver_iterations: config.physics.solver_iterations,
+        joint_limits: config.physics.joint_limits,
+        action: config.action,
         seed,
         obs_dim: env.obs_dim(),
         act_dim,

@@ -62,14 +62,22 @@ pub struct GaitSample {
     pub joint_angle: Vec<f32>,
     /// rad/s.
     pub joint_velocity: Vec<f32>,
-    /// Applied, N·m.
+    /// Torque the actuator delivered, averaged over the control period's physics steps, N·m
+    /// (after the joint-limit model; the servo's torque in `target` mode).
     pub joint_torque: Vec<f32>,
-    /// τ·ω averaged over the control period's physics steps, W.
+    /// Mechanical power delivered, W: each physics step's work `τ·Δq` over its length,
+    /// averaged over the control period's physics steps (`walk` module docs, "Power").
     pub joint_power: Vec<f32>,
+    /// The same with the absolute value taken per physics step, W: what the reward's power
+    /// term averages over the joints.
+    pub joint_abs_power: Vec<f32>,
     /// Left, right normal contact force, N.
     pub foot_force: [f32; 2],
     /// The torso fell (termination).
     pub fell: bool,
+    /// The torso left the lateral band or turned beyond the yaw limit (termination; only when
+    /// `fall.max_lateral` / `fall.max_yaw` are set).
+    pub off_course: bool,
     /// The torso passed the end of the track (termination).
     pub success: bool,
 }

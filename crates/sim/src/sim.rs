@@ -10,19 +10,47 @@ use crate::error::{SimError, UrdfError};
 use crate::math::{self, Iso};
 use crate::model::{JointKind, LinkPose, RobotModel, Shape};
 
-/// Physics settings of a world: the integrator step, the solver and the contact model.
+/// How a joint behaves at the ends of its range (crate docs, "Physics step and joint limits").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LimitModel {
+    /// Rapier's rigid one-sided limit constraint, torques applied unchanged: a torque pushing
+    /// into a limit is held there for free, and a coarse integrator step makes the joint
+    /// chatter against it.
+    Hard,
+    /// The rigid limit, plus: a torque `τ` that pushes a joint towards a limit is scaled by
+    /// `clamp(d/band, 0, 1)`, `d` the distance to that limit (band
+    /// [`PhysicsConfig::limit_band`]), at the start of every physics (Rapier) step: full
+    /// torque until `band` before the limit, zero at and past it. Torques pulling away from
+    /// a limit are untouched. An actuator cannot press a joint into its stop; loads from the
+    /// rest of the body still rest on it. Evaluated once per Rapier step, the fade is a
+    /// sampled spring of stiffness `|τ|/band`: it needs Rapier steps of a few milliseconds
+    /// (crate docs, "Physics step and joint limits").
+    Fade,
+    /// No rigid stop: the limit is a one-sided implicit spring-damper acting past the limit
+    /// (Rapier's soft constraint, natural frequency [`PhysicsConfig::limit_frequency`] and
+    /// damping ratio [`PhysicsConfig::limit_damping_ratio`] about the joint's effective
+    /// inertia), as Simscape models joint limits. Torques are applied unchanged.
+    Soft,
+}
+
+/// Physics settings of a world: the integrator step, the solver, the contact model and the
+/// joint limits.
 ///
-/// The defaults are the fastest settings that pass the 60 s PD-standing test
-/// (`tests/standing.rs`); see the crate docs for the measurements behind them.
+/// The defaults are the fastest settings that pass the physics tests (standing, joint limits,
+/// rigid-stance creep, pendulum, momentum); see the crate docs for the measurements behind
+/// them.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct PhysicsConfig {
     /// Rapier steps per control period; the physics step is `control_period / substeps`.
-    /// Default 1 (fastest stable setting, crate docs "Physics step").
+    /// Default 4, a physics step of 6.25 ms (crate docs, "Physics step and joint limits":
+    /// the `fade` limits act once per Rapier step and need steps this short; with fewer,
+    /// joints are seen more than 6° past their limits).
     pub substeps: u32,
     /// Rapier `num_solver_iterations`. In Rapier 0.36 each iteration is also an integration
-    /// substep of `dt / solver_iterations`. Default 16 (crate docs "Physics step": fewer let a
-    /// rigid, limit-pressed stance creep across the floor).
+    /// substep of `dt / solver_iterations`. Default 1 (crate docs, "Physics step and joint
+    /// limits": with four Rapier steps per control period one iteration each is enough).
     pub solver_iterations: u32,
     /// Gravitational acceleration, m/s², along −z. Default 9.81 (standard gravity).
     pub gravity: f32,
@@ -30,23 +58,42 @@ pub struct PhysicsConfig {
     /// Default 1.0 (SPEC §2: "flat, friction about 1").
     pub friction: f32,
     /// Armature (reflected actuator inertia, kg·m², MuJoCo's `armature`) that `WalkEnv` adds
-    /// to each torque-controlled joint. Default 0.1: see the crate docs ("Joint limits").
+    /// to each torque-controlled joint. Default 0.1: see the crate docs ("Physics step and
+    /// joint limits").
     pub actuator_armature: f32,
     /// Whether links of the robot collide with each other. Default false: with sagittal
     /// legs and limited shoulders the segments cannot meet in a meaningful way, and the
     /// paper's Simscape model only has foot/body–ground contact.
     pub self_collisions: bool,
+    /// How joint limits act: `hard`, `fade` or `soft` ([`LimitModel`]). Default `fade`
+    /// (crate docs, "Physics step and joint limits": the cheapest model that passes the
+    /// physics tests, the limit-pressing one included).
+    pub joint_limits: LimitModel,
+    /// `fade`: width of the band before a limit over which a torque pushing into it fades
+    /// to zero, rad. Default 2° = 0.0349 (`notes/walking-probes.md`; the narrowest that keeps
+    /// joints within 6° of their limits at the default step, crate docs).
+    pub limit_band: f32,
+    /// `soft`: natural frequency of the limit spring about the joint's effective inertia, Hz.
+    /// Default 20 (our choice, between Rapier's rigid 10⁶ Hz and a limit that sags under the
+    /// body's weight; the crate docs' table measures it).
+    pub limit_frequency: f32,
+    /// `soft`: damping ratio of the limit spring. Default 1 (critical).
+    pub limit_damping_ratio: f32,
 }
 
 impl Default for PhysicsConfig {
     fn default() -> Self {
         Self {
-            substeps: 1,
-            solver_iterations: 16,
+            substeps: 4,
+            solver_iterations: 1,
             gravity: 9.81,
             friction: 1.0,
             actuator_armature: 0.1,
             self_collisions: false,
+            joint_limits: LimitModel::Fade,
+            limit_band: 2.0f32.to_radians(),
+            limit_frequency: 20.0,
+            limit_damping_ratio: 1.0,
         }
     }
 }
@@ -92,6 +139,27 @@ impl PhysicsConfig {
                 "must be finite and ≥ 0",
             );
         }
+        if !(self.limit_band.is_finite() && self.limit_band > 0.0 && self.limit_band < 1.0) {
+            return bad(
+                "limit_band",
+                self.limit_band.to_string(),
+                "must be in (0, 1) rad",
+            );
+        }
+        if !(self.limit_frequency.is_finite() && self.limit_frequency > 0.0) {
+            return bad(
+                "limit_frequency",
+                self.limit_frequency.to_string(),
+                "must be finite and > 0",
+            );
+        }
+        if !(self.limit_damping_ratio.is_finite() && self.limit_damping_ratio >= 0.0) {
+            return bad(
+                "limit_damping_ratio",
+                self.limit_damping_ratio.to_string(),
+                "must be finite and ≥ 0",
+            );
+        }
         Ok(())
     }
 }
@@ -134,6 +202,15 @@ pub struct RobotState {
     pub qd: Vec<f64>,
 }
 
+/// An in-solver position servo on one joint ([`RobotSim::set_joint_motor`]).
+#[derive(Clone, Copy, Debug)]
+struct Servo {
+    target: f32,
+    stiffness: f32,
+    damping: f32,
+    max_torque: f32,
+}
+
 const ROBOT_GROUP: Group = Group::GROUP_1;
 const GROUND_GROUP: Group = Group::GROUP_2;
 
@@ -151,7 +228,17 @@ pub struct RobotSim {
     root_shift: Vector,
     /// Per joint: unit axis in the parent link frame.
     axis_in_parent: Vec<Vector>,
+    /// Per joint: the torque last commanded ([`RobotSim::set_joint_torque`]).
     torques: Vec<f32>,
+    /// Per joint: the external torque applied in the last step, after the limit model.
+    applied: Vec<f32>,
+    /// Per joint: limits, rad (None for fixed, continuous and unlimited joints).
+    limits: Vec<Option<[f32; 2]>>,
+    limit_model: LimitModel,
+    limit_band: f32,
+    servos: Vec<Option<Servo>>,
+    /// A step panicked inside Rapier ([`RobotSim::is_broken`]).
+    broken: bool,
     dt: f32,
     time: f64,
 }
@@ -319,6 +406,13 @@ impl RobotSim {
                 .contacts_enabled(false);
             if let Some([lo, hi]) = j.limits {
                 builder = builder.limits(JointAxis::AngX, [lo as f32, hi as f32]);
+                if setup.physics.joint_limits == LimitModel::Soft {
+                    // For multibody joints the softness only acts on limits (and friction).
+                    builder = builder.softness(SpringCoefficients::new(
+                        setup.physics.limit_frequency,
+                        setup.physics.limit_damping_ratio,
+                    ));
+                }
             }
             let a = math::mat_vec(&j.origin.r, j.axis);
             axis_in_parent[ji] = Vector::new(a[0] as f32, a[1] as f32, a[2] as f32);
@@ -406,6 +500,19 @@ impl RobotSim {
             link_ids,
             axis_in_parent,
             torques: vec![0.0; n_joints],
+            applied: vec![0.0; n_joints],
+            limits: model
+                .joints()
+                .iter()
+                .map(|j| match (j.kind, j.limits) {
+                    (JointKind::Fixed, _) | (_, None) => None,
+                    (_, Some([lo, hi])) => Some([lo as f32, hi as f32]),
+                })
+                .collect(),
+            limit_model: setup.physics.joint_limits,
+            limit_band: setup.physics.limit_band,
+            servos: vec![None; n_joints],
+            broken: false,
             dt: setup.dt,
             time: 0.0,
             model,
@@ -432,10 +539,14 @@ impl RobotSim {
             .and_then(|i| self.world.multibody_joints.get_multibody(i))
     }
 
-    /// Position of joint `j` (URDF order), rad; 0 for fixed joints.
+    /// Position of joint `j` (URDF order), rad; 0 for fixed joints, NaN once broken
+    /// ([`Self::is_broken`]).
     pub fn joint_position(&self, j: usize) -> f32 {
         if self.model.joints()[j].kind == JointKind::Fixed {
             return 0.0;
+        }
+        if self.broken {
+            return f32::NAN;
         }
         self.mb()
             .and_then(|mb| mb.link(self.link_ids[j]))
@@ -455,11 +566,99 @@ impl RobotSim {
             .unwrap_or(0.0)
     }
 
-    /// Sets the torque applied at joint `j` (URDF order), N·m, positive about the joint axis
-    /// on the child (and its reaction on the parent). It is applied, unchanged, at every
-    /// following [`Self::step`] until set again. No clamping here: callers clamp to effort.
+    /// Sets the torque commanded at joint `j` (URDF order), N·m, positive about the joint axis
+    /// on the child (and its reaction on the parent). It is applied at every following
+    /// [`Self::step`] until set again, through the limit model ([`LimitModel::Fade`] scales
+    /// it near a limit it pushes into; [`Self::applied_torque`] says what went in). No
+    /// clamping to effort here: callers do that.
     pub fn set_joint_torque(&mut self, j: usize, torque: f32) {
         self.torques[j] = if torque.is_finite() { torque } else { 0.0 };
+    }
+
+    /// The factor in [0, 1] the limit model applies to a torque `torque` commanded at joint
+    /// `j` in position `q`: for [`LimitModel::Fade`] on a limited joint,
+    /// `clamp((hi − q)/band, 0, 1)` for a torque pushing up, `clamp((q − lo)/band, 0, 1)` for
+    /// one pushing down; 1 otherwise.
+    pub fn limit_factor(&self, j: usize, q: f32, torque: f32) -> f32 {
+        match (self.limit_model, self.limits[j]) {
+            (LimitModel::Fade, Some([lo, hi])) if torque != 0.0 => {
+                let room = if torque > 0.0 { hi - q } else { q - lo };
+                (room / self.limit_band).clamp(0.0, 1.0)
+            }
+            _ => 1.0,
+        }
+    }
+
+    /// The external torque applied at joint `j` during the last [`Self::step`], N·m: the
+    /// commanded torque times [`Self::limit_factor`] at the start of the step (without any
+    /// servo's torque).
+    pub fn applied_torque(&self, j: usize) -> f32 {
+        self.applied[j]
+    }
+
+    /// The torque of joint `j`'s servo ([`Self::set_joint_motor`]) in the current state, N·m:
+    /// `clamp(kp·(q* − q) − kd·q̇, ±τ_max)`; 0 without one. Rapier integrates the servo
+    /// implicitly, so after a step this is the torque of its last solver substep.
+    pub fn servo_torque(&self, j: usize) -> f32 {
+        self.servos[j].map_or(0.0, |s| {
+            let (q, qd) = (self.joint_position(j), self.joint_velocity(j));
+            (s.stiffness * (s.target - q) - s.damping * qd).clamp(-s.max_torque, s.max_torque)
+        })
+    }
+
+    /// The torque joint `j`'s actuator delivers, N·m: [`Self::applied_torque`] plus
+    /// [`Self::servo_torque`].
+    pub fn delivered_torque(&self, j: usize) -> f32 {
+        self.applied[j] + self.servo_torque(j)
+    }
+
+    /// Drives joint `j` towards `target` (rad) with a position servo run inside Rapier's
+    /// solver at every solver substep: a `MotorModel::ForceBased` motor of stiffness
+    /// `stiffness` (N·m/rad) and damping `damping` (N·m·s/rad) whose torque Rapier clamps to
+    /// `±max_torque` (N·m), i.e. `τ = clamp(kp·(q* − q) − kd·q̇, ±τ_max)` evaluated
+    /// implicitly. Replaces any previous servo on the joint; `max_torque = 0` removes it.
+    /// [`Self::servo_torque`] says what it delivers.
+    pub fn set_joint_motor(
+        &mut self,
+        j: usize,
+        target: f32,
+        stiffness: f32,
+        damping: f32,
+        max_torque: f32,
+    ) {
+        if self.model.joints()[j].kind == JointKind::Fixed {
+            return;
+        }
+        let servo = Servo {
+            target: if target.is_finite() { target } else { 0.0 },
+            stiffness: stiffness.max(0.0),
+            damping: damping.max(0.0),
+            max_torque: max_torque.max(0.0),
+        };
+        self.servos[j] = (servo.max_torque > 0.0).then_some(servo);
+        self.set_motor(j, self.servos[j]);
+    }
+
+    /// Installs (`Some`) or removes (`None`) the Rapier motor of joint `j`.
+    fn set_motor(&mut self, j: usize, servo: Option<Servo>) {
+        let link_id = self.link_ids[j];
+        let Some(link) = self
+            .multibody
+            .and_then(|i| self.world.multibody_joints.get_multibody_mut(i))
+            .and_then(|mb| mb.link_mut(link_id))
+        else {
+            return;
+        };
+        match servo {
+            Some(s) => {
+                link.joint
+                    .data
+                    .set_motor(JointAxis::AngX, s.target, 0.0, s.stiffness, s.damping)
+                    .set_motor_model(JointAxis::AngX, MotorModel::ForceBased)
+                    .set_motor_max_force(JointAxis::AngX, s.max_torque);
+            }
+            None => link.joint.data.motor_axes.remove(JointAxesMask::ANG_X),
+        }
     }
 
     /// Holds joint `j` at `target` (rad) with an implicit spring-damper of stiffness `kp`
@@ -499,15 +698,22 @@ impl RobotSim {
     /// Torques go in as a pair of equal and opposite external torques `±τ·a` on the child and
     /// parent links, `a` the joint axis in the world at the start of the step. Rapier maps link
     /// wrenches to generalised forces through the link Jacobians: the pair contributes exactly
-    /// `τ` to the joint's own coordinate and cancels on every other one.
+    /// `τ` to the joint's own coordinate and cancels on every other one. Under
+    /// [`LimitModel::Fade`] the torque is first scaled by [`Self::limit_factor`] at the
+    /// joint's position at the start of the step.
     pub fn step(&mut self) {
         for &h in &self.bodies {
             if let Some(rb) = self.world.bodies.get_mut(h) {
                 rb.reset_torques(false);
             }
         }
-        for (ji, j) in self.model.joints().iter().enumerate() {
-            let tau = self.torques[ji];
+        let model = self.model.clone();
+        for (ji, j) in model.joints().iter().enumerate() {
+            let mut tau = self.torques[ji];
+            if tau != 0.0 && self.limit_model == LimitModel::Fade {
+                tau *= self.limit_factor(ji, self.joint_position(ji), tau);
+            }
+            self.applied[ji] = tau;
             if tau == 0.0 || j.kind == JointKind::Fixed {
                 continue;
             }
@@ -529,8 +735,23 @@ impl RobotSim {
                 }
             }
         }
-        self.world.step();
+        if !self.broken {
+            // Rapier's motor constraint (the servos of `set_joint_motor`) clamps with the
+            // joint position, which panics once a state has blown up to NaN (absurd models,
+            // e.g. a link 1e30 m away). Such a world is lost anyway: it is marked broken,
+            // reads NaN from then on, and the environment ends the episode as a fall.
+            let world = &mut self.world;
+            let stepped =
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| world.step())).is_ok();
+            self.broken = !stepped;
+        }
         self.time += self.dt as f64;
+    }
+
+    /// Whether a step failed inside Rapier (a state that blew up to NaN); the world then
+    /// stands still and [`Self::joint_position`] reads NaN.
+    pub fn is_broken(&self) -> bool {
+        self.broken
     }
 
     /// World pose of link `l`'s frame.

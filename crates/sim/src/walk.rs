@@ -46,21 +46,86 @@
 //! early training sees). The factors are constants, not running statistics, so a policy
 //! means the same thing in every run and checkpoint. Turn it off for the raw SI values above.
 //!
+//! # Action
+//!
+//! Actions are clamped to `[-1, 1]` (NaN reads as 0), one per actuated joint.
+//!
+//! - **`action = "torque"`** (default, the paper's): joint torque `τ = a·τmax`, `τmax` the
+//!   joint's URDF `<limit effort>`, commanded for the whole control period and passed through
+//!   the joint-limit model ([`PhysicsConfig::joint_limits`](crate::PhysicsConfig); crate docs,
+//!   "Physics step and joint limits").
+//! - **`action = "target"`**: a joint angle target `q*`, tracked by a position servo that
+//!   Rapier integrates inside its solver at every physics substep (a `ForceBased` motor:
+//!   `τ = clamp(kp·(q* − q) − kd·q̇, ±τmax)`, implicit, so stable at any gain), as MATLAB's
+//!   humanoid walker drives its joints through PD set-points. The map is piecewise linear
+//!   through the standing pose: `q* = q_stand + a·(hi − q_stand)` for `a ≥ 0`,
+//!   `q_stand + a·(q_stand − lo)` for `a < 0` ([`WalkEnv::target_angle`]), so a zero action
+//!   holds the standing pose and ±1 reach the limits. Gains ([`TargetGains`]): `kp` = 1500
+//!   N·m/rad, `kd` = 60 N·m·s/rad on every actuated joint, measured: the ankles need more than
+//!   the ≈ 620 N·m/rad of `m·g·h` to hold the 70 kg body upright, and with these gains a zero
+//!   action stands 20 s from every reset seed tried (torso within 3 cm, joints within 1.2°;
+//!   1000/40 drifts 7 cm, 600/30 falls); the servo reaches full effort at 5.7° (hips, knees)
+//!   and 4.6° (ankles) of error. With the torso held in the air, a step of the target to
+//!   half range is within 2° after 0.09–0.10 s (ankle), 0.13 s (knee), 0.11 s (hip,
+//!   extending) and 0.52 s (hip, flexing: lifting the leg to −46°) (`tests/target_mode.rs`).
+//!   A servo's motor impulses are constraint impulses in Rapier, which do not conserve
+//!   momentum as exactly as external torques do (crate docs, "Known limitations").
+//!
+//! # Power
+//!
+//! The power term and the gait data use the mechanical power the actuator delivers at each
+//! actuated joint: for every physics (Rapier) step, the work `τ·Δq` over the step's length
+//! `h`, where `τ` is the torque actually delivered: in `torque` mode the commanded torque
+//! after the joint-limit model (constant over the step, so the work is exact); in `target`
+//! mode the servo's torque, the mean of its law at the step's start and end states (a
+//! trapezoid rule). [`GaitSample::joint_power`](crate::GaitSample) is the mean of `τ·Δq/h`
+//! over the control period's physics steps, [`GaitSample::joint_abs_power`](crate::GaitSample)
+//! the mean of its absolute value, and [`GaitSample::joint_torque`](crate::GaitSample) the mean
+//! delivered torque. So a servo holding a load, or a torque faded away at a limit, shows in
+//! the torque; a joint at rest delivers no mechanical power whatever torque it holds (that is
+//! what `reward.torque_sq` prices).
+//!
 //! # Reward (paper eq. 12)
 //!
 //! `r = w_v·vx − w_y·y² − w_z·z² − w_P·P + c`, defaults `w_v = 1, w_y = 5, w_z = 25,
 //! w_P = 0.0005, c = 0.025`: `vx` the torso's forward (world x) velocity, `y` its lateral
-//! offset, `z` its height error, `P` the mean over actuated joints of `|τ·ω|` (averaged over
-//! the physics steps of the control period). Each term is reported in
-//! [`StepInfo::reward_terms`](crate::StepInfo) as `forward`, `lateral`, `height`, `power`,
-//! `alive`; they sum to the reward.
+//! offset, `z` its height error, `P` the mean over actuated joints of the delivered `|τ·ω|`
+//! (Power above). Each term is reported in [`StepInfo::reward_terms`](crate::StepInfo) as
+//! `forward`, `lateral`, `height`, `power`, `alive`; they sum to the reward. The alive bonus
+//! `c` is not paid on a step that ends in a fall or off course.
+//!
+//! Options ([`RewardConfig`], all off by default, which is eq. 12):
+//!
+//! - `reward.action_sq = w`: adds the term `action_sq = −w·Σ aᵢ²` (MATLAB's walking-robot
+//!   examples use `w` = 0.02 with their torques normalised to [−1, 1]);
+//! - `reward.torque_sq = w`: adds `torque_sq = −w·Σ (τᵢ/τmaxᵢ)²`, `τᵢ` the mean delivered
+//!   torque of the period: prices holding a load (against a limit, gravity or a servo's
+//!   target) that the power term does not see;
+//! - `reward.forward_gate = { max_tilt, max_height_drop }`: `forward` is 0 on steps where the
+//!   torso tilts more than `max_tilt` from vertical or is more than `max_height_drop` below its
+//!   standing height (DeepMind Control's walker pays its move reward only in proportion to
+//!   its stand reward).
 //!
 //! # Episode
 //!
 //! Truncated after `episode_seconds / control_period` steps (60 s / 0.025 s = 2400).
 //! Terminated on a fall: torso origin more than [`FallConfig::max_height_drop`] below its
 //! standing height, torso z axis tilted more than [`FallConfig::max_tilt`] from vertical, or a
-//! non-finite state. Terminated with success when the torso origin passes `x = track_length`.
+//! non-finite state. Terminated off course ([`GaitSample::off_course`](crate::GaitSample)), when
+//! set: torso origin more than [`FallConfig::max_lateral`] from the centre line, or its heading
+//! (the angle of its x axis on the ground from world x) more than [`FallConfig::max_yaw`] from
+//! the track direction (both off by default, as in the paper). Terminated with success when
+//! the torso origin passes `x = track_length`.
+//!
+//! # Reset
+//!
+//! The robot starts from a pose ([`ResetConfig::pose`]: `standing` by default; `crouch`,
+//! `split`, or `mixed` = one of the three drawn from the seed), plus uniform noise on every
+//! movable joint's angle and velocity ([`InitNoise`], ±0.01 rad and ±0.01 rad/s by default;
+//! raise them for a wider start distribution), clamped into the joint limits, placed with its
+//! lowest point on the ground, at rest. The draws, from a ChaCha8 stream seeded with the reset
+//! seed: for each movable joint in URDF order the angle then the velocity noise, each
+//! `half-width × U(−1, 1)`; then the `mixed` pose; then the leading leg of `split`.
 
 use std::collections::BTreeMap;
 use std::ops::Range;
@@ -90,8 +155,24 @@ pub struct RewardConfig {
     pub height: f32,
     /// Weight of the power penalty `P`. Default 0.0005 (eq. 12).
     pub power: f32,
-    /// Constant reward per step for staying up. Default 0.025 (eq. 12).
+    /// Constant reward per step for staying up, not paid on a step that ends in a fall or
+    /// off course. Default 0.025 (eq. 12).
     pub alive: f32,
+    /// Weight of the squared-action penalty `Σ aᵢ²` over the actuated joints (the clamped
+    /// action of the step). Default 0 (the paper has none; MATLAB's walking-robot examples
+    /// use 0.02).
+    pub action_sq: f32,
+    /// Weight of the squared-torque penalty `Σ (τᵢ/τmaxᵢ)²`, τᵢ the torque the actuator
+    /// delivered (mean over the control period's physics steps, servo torque included) and
+    /// τmaxᵢ its effort limit. Unlike the power term it prices holding a load still. Default
+    /// 0 (the paper has none).
+    pub torque_sq: f32,
+    /// Pay the forward term only while the torso is upright and tall (DeepMind Control's
+    /// walker multiplies its move reward by its stand reward): when set, `w_v·vx` is replaced
+    /// by 0 on steps where the torso tilts more than `max_tilt` or is lower than
+    /// `max_height_drop` under its standing height. Default none (eq. 12 pays it always).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub forward_gate: Option<UprightGate>,
 }
 
 impl Default for RewardConfig {
@@ -102,6 +183,30 @@ impl Default for RewardConfig {
             height: 25.0,
             power: 0.0005,
             alive: 0.025,
+            action_sq: 0.0,
+            torque_sq: 0.0,
+            forward_gate: None,
+        }
+    }
+}
+
+/// When the torso counts as upright and tall ([`RewardConfig::forward_gate`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct UprightGate {
+    /// Largest tilt of the torso's z axis from vertical, rad. Default 0.35 (20°, our choice:
+    /// the paper's gaits stay within a few degrees).
+    pub max_tilt: f32,
+    /// Largest drop of the torso origin below its standing height, m. Default 0.15 (our
+    /// choice: half the fall threshold).
+    pub max_height_drop: f32,
+}
+
+impl Default for UprightGate {
+    fn default() -> Self {
+        Self {
+            max_tilt: 20.0f32.to_radians(),
+            max_height_drop: 0.15,
         }
     }
 }
@@ -116,6 +221,14 @@ pub struct FallConfig {
     /// Fall when the torso's z axis is tilted more than this from vertical, rad. Default
     /// π/4 (45°, our choice, as MATLAB's walking-robot examples stop at 45° roll/pitch).
     pub max_tilt: f32,
+    /// End the episode off course when the torso origin is more than this from the track
+    /// centre line (`|y|`), m. Default none (the paper has no such termination).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_lateral: Option<f32>,
+    /// End the episode off course when the torso's heading (yaw, the rotation of its x axis
+    /// about world z) is more than this from the track direction, rad. Default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_yaw: Option<f32>,
 }
 
 impl Default for FallConfig {
@@ -123,6 +236,86 @@ impl Default for FallConfig {
         Self {
             max_height_drop: 0.30,
             max_tilt: std::f32::consts::FRAC_PI_4,
+            max_lateral: None,
+            max_yaw: None,
+        }
+    }
+}
+
+/// The pose a reset starts from, before [`InitNoise`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ResetPose {
+    /// [`WalkConfig::standing_pose`].
+    Standing,
+    /// The standing pose lowered by [`ResetConfig::crouch`] (see there).
+    Crouch,
+    /// The standing pose with the legs apart by [`ResetConfig::split`] (see there).
+    Split,
+    /// One of the three above, drawn uniformly from the reset seed.
+    Mixed,
+}
+
+/// Where episodes start ([`WalkConfig::reset`]).
+///
+/// `crouch` and `split` read the actuated joints as (hip, knee, ankle) of each leg in turn,
+/// as the default `actuated_joints` list them, and keep each foot at the standing pose's
+/// angle to the torso (hip + knee + ankle unchanged), so the feet start flat.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ResetConfig {
+    /// The pose. Default `standing` (SPEC §2: "standing pose with small seeded
+    /// perturbations").
+    pub pose: ResetPose,
+    /// `crouch` depth `c`, rad: hips −c, knees +2c, ankles −c from the standing pose (the
+    /// thighs and shanks tilt by `c` each, the torso stays upright). Default 10° (0.1745),
+    /// which the ankles' −20° limit allows from the standing −8°.
+    pub crouch: f32,
+    /// `split` half-angle `s`, rad: the leading leg's hip −s and ankle +s, the trailing
+    /// leg's hip +s and ankle −s; which leg leads is drawn from the reset seed. The feet stay
+    /// flat but not level: the robot is placed with its lowest point on the ground and the
+    /// other foot starts up to about a centimetre above it. Default 10° (0.1745).
+    pub split: f32,
+}
+
+impl Default for ResetConfig {
+    fn default() -> Self {
+        Self {
+            pose: ResetPose::Standing,
+            crouch: 10.0f32.to_radians(),
+            split: 10.0f32.to_radians(),
+        }
+    }
+}
+
+/// How an action drives the actuated joints ([`WalkConfig::action`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ActionMode {
+    /// `τ = a·τmax`, held for the control period (the paper's).
+    Torque,
+    /// `a` sets a joint angle target, tracked by an in-solver position servo (module docs,
+    /// "Action").
+    Target,
+}
+
+/// Gains of the `target` action mode's servos ([`WalkConfig::target`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TargetGains {
+    /// Stiffness `kp`, N·m/rad, every actuated joint. Default 1500 (module docs, "Action":
+    /// above the ≈ 620 N·m/rad the ankles need to hold the 70 kg body upright, and full
+    /// effort at 5.7° of error).
+    pub stiffness: f32,
+    /// Damping `kd`, N·m·s/rad. Default 60 (module docs, "Action").
+    pub damping: f32,
+}
+
+impl Default for TargetGains {
+    fn default() -> Self {
+        Self {
+            stiffness: 1500.0,
+            damping: 60.0,
         }
     }
 }
@@ -168,6 +361,12 @@ pub struct WalkConfig {
     pub fall: FallConfig,
     /// Reset noise.
     pub init_noise: InitNoise,
+    /// Reset pose.
+    pub reset: ResetConfig,
+    /// How actions drive the joints: `torque` or `target`. Default `torque` (paper §5).
+    pub action: ActionMode,
+    /// Servo gains of the `target` action mode.
+    pub target: TargetGains,
     /// Multiply the observation by the fixed per-quantity factors of the module docs
     /// ([`WalkEnv::obs_scale`]) so every entry is of order one. Default true (esrl's choice:
     /// the raw values span three orders of magnitude, accelerations reach 160 m/s²).
@@ -203,6 +402,9 @@ impl Default for WalkConfig {
             reward: RewardConfig::default(),
             fall: FallConfig::default(),
             init_noise: InitNoise::default(),
+            reset: ResetConfig::default(),
+            action: ActionMode::Torque,
+            target: TargetGains::default(),
             normalize_obs: true,
             actuated_joints: [
                 "left_hip",
@@ -268,8 +470,24 @@ impl WalkConfig {
         fin("reward.height", self.reward.height)?;
         fin("reward.power", self.reward.power)?;
         fin("reward.alive", self.reward.alive)?;
+        nonneg("reward.action_sq", self.reward.action_sq)?;
+        nonneg("reward.torque_sq", self.reward.torque_sq)?;
+        if let Some(g) = &self.reward.forward_gate {
+            pos("reward.forward_gate.max_tilt", g.max_tilt)?;
+            pos("reward.forward_gate.max_height_drop", g.max_height_drop)?;
+        }
         pos("fall.max_height_drop", self.fall.max_height_drop)?;
         pos("fall.max_tilt", self.fall.max_tilt)?;
+        if let Some(v) = self.fall.max_lateral {
+            pos("fall.max_lateral", v)?;
+        }
+        if let Some(v) = self.fall.max_yaw {
+            pos("fall.max_yaw", v)?;
+        }
+        nonneg("reset.crouch", self.reset.crouch)?;
+        nonneg("reset.split", self.reset.split)?;
+        nonneg("target.stiffness", self.target.stiffness)?;
+        nonneg("target.damping", self.target.damping)?;
         nonneg("init_noise.joint_angle", self.init_noise.joint_angle)?;
         nonneg("init_noise.joint_velocity", self.init_noise.joint_velocity)?;
         if self.actuated_joints.is_empty() {
@@ -387,6 +605,8 @@ struct WalkShared {
     actuated: Vec<usize>,
     passive: Vec<usize>,
     effort: Vec<f32>,
+    /// Per actuated joint: lower and upper limit, rad (±∞ without limits).
+    range: Vec<[f32; 2]>,
     /// Standing pose, one entry per joint (URDF order).
     standing_q: Vec<f64>,
     standing_height: f64,
@@ -406,6 +626,9 @@ pub struct WalkEnv {
     prev_velocity: Vector,
     acceleration: Vector,
     steps: usize,
+    /// Per actuated joint, over the last control period's physics steps: mean delivered
+    /// torque, mean power τ·ω and mean |τ·ω|.
+    last_torque: Vec<f32>,
     last_power: Vec<f32>,
     last_abs_power: Vec<f32>,
 }
@@ -516,6 +739,40 @@ impl WalkEnv {
             .iter()
             .map(|&j| model.joints()[j].effort as f32)
             .collect();
+        let range: Vec<[f32; 2]> = actuated
+            .iter()
+            .map(|&j| {
+                model.joints()[j]
+                    .limits
+                    .map_or([f32::NEG_INFINITY, f32::INFINITY], |[lo, hi]| {
+                        [lo as f32, hi as f32]
+                    })
+            })
+            .collect();
+        if config.action == ActionMode::Target {
+            if let Some(k) = range
+                .iter()
+                .position(|r| !r[0].is_finite() || !r[1].is_finite())
+            {
+                return Err(SimError::Model {
+                    field: "action".into(),
+                    reason: format!(
+                        "`target` maps actions onto joint ranges, and joint `{}` has no limits",
+                        config.actuated_joints[k]
+                    ),
+                });
+            }
+        }
+        if config.reset.pose != ResetPose::Standing && actuated.len() % 3 != 0 {
+            return Err(SimError::Model {
+                field: "reset.pose".into(),
+                reason: format!(
+                    "`crouch`, `split` and `mixed` read the actuated joints as (hip, knee, ankle) \
+                     per leg, and {} joints are not a multiple of 3",
+                    actuated.len()
+                ),
+            });
+        }
         let weight = (model.total_mass() * config.physics.gravity as f64) as f32;
         let layout = ObsLayout::new(actuated.len(), passive.len());
         let obs_scale = if config.normalize_obs {
@@ -538,6 +795,7 @@ impl WalkEnv {
             actuated,
             passive,
             effort,
+            range,
             standing_q,
             standing_height,
             weight,
@@ -553,6 +811,7 @@ impl WalkEnv {
             prev_velocity: Vector::ZERO,
             acceleration: Vector::ZERO,
             steps: 0,
+            last_torque: vec![0.0; n_a],
             last_power: vec![0.0; n_a],
             last_abs_power: vec![0.0; n_a],
         })
@@ -576,6 +835,7 @@ impl WalkEnv {
             prev_velocity: Vector::ZERO,
             acceleration: Vector::ZERO,
             steps: 0,
+            last_torque: vec![0.0; n_a],
             last_power: vec![0.0; n_a],
             last_abs_power: vec![0.0; n_a],
         }
@@ -719,6 +979,25 @@ impl WalkEnv {
         self.steps
     }
 
+    /// The joint angle target of actuated joint `k` for action `a` in `target` mode (module
+    /// docs, "Action"): the standing angle at 0, the joint's limits at ±1, linear in between
+    /// on each side.
+    pub fn target_angle(&self, k: usize, a: f32) -> f32 {
+        let s = &self.shared;
+        let stand = s.standing_q[s.actuated[k]] as f32;
+        let [lo, hi] = s.range[k];
+        let a = if a.is_finite() {
+            a.clamp(-1.0, 1.0)
+        } else {
+            0.0
+        };
+        if a >= 0.0 {
+            stand + a * (hi - stand)
+        } else {
+            stand + a * (stand - lo)
+        }
+    }
+
     fn observation(&self) -> Vec<f32> {
         let s = &self.shared;
         let pose = self.sim.link_pose(s.torso);
@@ -751,6 +1030,51 @@ impl WalkEnv {
     }
 }
 
+/// Angle between the torso's z axis and the world's, rad.
+fn torso_tilt(rotation: Rotation) -> f32 {
+    (rotation * Vector::Z).z.clamp(-1.0, 1.0).acos()
+}
+
+/// Heading of the torso: the angle of its x axis projected on the ground from world x, rad
+/// (positive to the left); 0 when the x axis points straight up or down.
+fn torso_yaw(rotation: Rotation) -> f32 {
+    let x = rotation * Vector::X;
+    if x.x == 0.0 && x.y == 0.0 {
+        0.0
+    } else {
+        x.y.atan2(x.x)
+    }
+}
+
+/// Offsets of the actuated joints from the standing pose for a reset `pose` (module docs of
+/// [`ResetConfig`]), joints read as (hip, knee, ankle) per leg.
+fn reset_offsets(
+    config: &ResetConfig,
+    pose: ResetPose,
+    n: usize,
+    rng: &mut ChaCha8Rng,
+) -> Vec<f32> {
+    let mut d = vec![0.0f32; n];
+    match pose {
+        ResetPose::Standing | ResetPose::Mixed => {}
+        ResetPose::Crouch => {
+            let c = config.crouch;
+            for leg in d.chunks_exact_mut(3) {
+                leg.copy_from_slice(&[-c, 2.0 * c, -c]);
+            }
+        }
+        ResetPose::Split => {
+            let s = config.split;
+            let lead = rng.random_range(0..n / 3);
+            for (i, leg) in d.chunks_exact_mut(3).enumerate() {
+                let sign = if i == lead { -1.0 } else { 1.0 };
+                leg.copy_from_slice(&[sign * s, 0.0, -sign * s]);
+            }
+        }
+    }
+    d
+}
+
 impl Env for WalkEnv {
     fn obs_dim(&self) -> usize {
         self.shared.layout.len
@@ -766,17 +1090,33 @@ impl Env for WalkEnv {
         let noise = &s.config.init_noise;
         let mut q = s.standing_q.clone();
         let mut qd = vec![0.0; q.len()];
+        let mut dq = vec![0.0; q.len()];
         for (j, joint) in s.model.joints().iter().enumerate() {
             if !joint.is_movable() {
                 continue;
             }
-            let dq = noise.joint_angle as f64 * rng.random_range(-1.0..=1.0);
-            let dqd = noise.joint_velocity as f64 * rng.random_range(-1.0..=1.0);
-            q[j] += dq;
+            dq[j] = noise.joint_angle as f64 * rng.random_range(-1.0..=1.0);
+            qd[j] = noise.joint_velocity as f64 * rng.random_range(-1.0..=1.0);
+        }
+        // Drawn after the noise, so that `standing` resets are those of earlier versions.
+        let pose = match s.config.reset.pose {
+            ResetPose::Mixed => {
+                [ResetPose::Standing, ResetPose::Crouch, ResetPose::Split][rng.random_range(0..3)]
+            }
+            p => p,
+        };
+        let offsets = reset_offsets(&s.config.reset, pose, s.actuated.len(), &mut rng);
+        for (k, &j) in s.actuated.iter().enumerate() {
+            q[j] += offsets[k] as f64;
+        }
+        for (j, joint) in s.model.joints().iter().enumerate() {
+            if !joint.is_movable() {
+                continue;
+            }
+            q[j] += dq[j];
             if let Some([lo, hi]) = joint.limits {
                 q[j] = q[j].clamp(lo, hi);
             }
-            qd[j] = dqd;
         }
         let poses = s.model.forward_kinematics(&Iso::IDENTITY, &q);
         let state = RobotState {
@@ -789,6 +1129,7 @@ impl Env for WalkEnv {
         self.prev_velocity = self.sim.link_origin_velocity(s.torso);
         self.acceleration = Vector::ZERO;
         self.steps = 0;
+        self.last_torque.fill(0.0);
         self.last_power.fill(0.0);
         self.last_abs_power.fill(0.0);
         self.observation()
@@ -805,18 +1146,40 @@ impl Env for WalkEnv {
                 0.0
             };
             self.prev_action[k] = a;
-            self.sim.set_joint_torque(s.actuated[k], a * s.effort[k]);
+            let j = s.actuated[k];
+            match s.config.action {
+                ActionMode::Torque => self.sim.set_joint_torque(j, a * s.effort[k]),
+                ActionMode::Target => {
+                    let t = &s.config.target;
+                    let target = self.target_angle(k, a);
+                    self.sim
+                        .set_joint_motor(j, target, t.stiffness, t.damping, s.effort[k]);
+                }
+            }
         }
         let substeps = s.config.physics.substeps as usize;
+        let share = 1.0 / substeps as f32;
+        let h = self.sim.dt();
+        self.last_torque.fill(0.0);
         self.last_power.fill(0.0);
         self.last_abs_power.fill(0.0);
+        let mut start = vec![(0.0f32, 0.0f32); n_a];
         for _ in 0..substeps {
-            self.sim.step();
-            for k in 0..n_a {
+            for (k, st) in start.iter_mut().enumerate() {
                 let j = s.actuated[k];
-                let p = self.sim.joint_torque(j) * self.sim.joint_velocity(j);
-                self.last_power[k] += p / substeps as f32;
-                self.last_abs_power[k] += p.abs() / substeps as f32;
+                *st = (self.sim.joint_position(j), self.sim.servo_torque(j));
+            }
+            self.sim.step();
+            for (k, &(q0, servo0)) in start.iter().enumerate() {
+                let j = s.actuated[k];
+                // Module docs, "Power": the work of the physics step over its length. The
+                // applied torque is constant over the step; a servo's is taken as the mean of
+                // its law at the step's start and end.
+                let tau = self.sim.applied_torque(j) + 0.5 * (servo0 + self.sim.servo_torque(j));
+                let p = tau * (self.sim.joint_position(j) - q0) / h;
+                self.last_torque[k] += tau * share;
+                self.last_power[k] += p * share;
+                self.last_abs_power[k] += p.abs() * share;
             }
         }
         self.steps += 1;
@@ -829,25 +1192,48 @@ impl Env for WalkEnv {
         let vx = v_world.x;
         let y = pose.translation.y;
         let z = pose.translation.z - s.standing_height as f32;
-        let p_mean = self.last_abs_power.iter().sum::<f32>() / n_a as f32;
+        let tilt = torso_tilt(pose.rotation);
+        let finite = obs.iter().all(|v| v.is_finite());
+        let fall = &s.config.fall;
+        let fell = !finite || z < -fall.max_height_drop || tilt > fall.max_tilt;
+        let off_course = !fell
+            && (fall.max_lateral.is_some_and(|m| y.abs() > m)
+                || fall
+                    .max_yaw
+                    .is_some_and(|m| torso_yaw(pose.rotation).abs() > m));
         let w = &s.config.reward;
-        let terms = [
-            ("forward", w.forward * vx),
+        let upright = w
+            .forward_gate
+            .as_ref()
+            .is_none_or(|g| tilt <= g.max_tilt && z >= -g.max_height_drop);
+        let p_mean = self.last_abs_power.iter().sum::<f32>() / n_a as f32;
+        let mut terms = vec![
+            ("forward", if upright { w.forward * vx } else { 0.0 }),
             ("lateral", -w.lateral * y * y),
             ("height", -w.height * z * z),
             ("power", -w.power * p_mean),
-            ("alive", w.alive),
+            ("alive", if fell || off_course { 0.0 } else { w.alive }),
         ];
+        if w.action_sq != 0.0 {
+            let a2: f32 = self.prev_action.iter().map(|a| a * a).sum();
+            terms.push(("action_sq", -w.action_sq * a2));
+        }
+        if w.torque_sq != 0.0 {
+            let t2: f32 = self
+                .last_torque
+                .iter()
+                .zip(&s.effort)
+                .map(|(t, e)| (t / e).powi(2))
+                .sum();
+            terms.push(("torque_sq", -w.torque_sq * t2));
+        }
         let mut reward: f32 = terms.iter().map(|t| t.1).sum();
-        let up = pose.rotation * Vector::Z;
-        let tilt = up.z.clamp(-1.0, 1.0).acos();
-        let finite = obs.iter().all(|v| v.is_finite()) && reward.is_finite();
-        if !finite {
+        let fell = fell || !reward.is_finite();
+        if !finite || !reward.is_finite() {
             reward = 0.0;
         }
-        let fell = !finite || z < -s.config.fall.max_height_drop || tilt > s.config.fall.max_tilt;
-        let success = !fell && pose.translation.x >= s.config.track_length;
-        let terminated = fell || success;
+        let success = !fell && !off_course && pose.translation.x >= s.config.track_length;
+        let terminated = fell || off_course || success;
         let truncated = !terminated && self.steps >= s.max_steps;
         let feet = s.feet.map(|f| self.sim.ground_normal_force(f));
         let gait = GaitSample {
@@ -867,14 +1253,12 @@ impl Env for WalkEnv {
                 .iter()
                 .map(|&j| self.sim.joint_velocity(j))
                 .collect(),
-            joint_torque: s
-                .actuated
-                .iter()
-                .map(|&j| self.sim.joint_torque(j))
-                .collect(),
+            joint_torque: self.last_torque.clone(),
             joint_power: self.last_power.clone(),
+            joint_abs_power: self.last_abs_power.clone(),
             foot_force: feet,
             fell,
+            off_course,
             success,
         };
         Step {
@@ -883,7 +1267,7 @@ impl Env for WalkEnv {
             terminated,
             truncated,
             info: StepInfo {
-                reward_terms: terms.to_vec(),
+                reward_terms: terms,
                 gait: Some(gait),
             },
         }

@@ -3,12 +3,15 @@
 //! ran with.
 
 use esrl_sim::bench::bench_walk;
-use esrl_sim::WalkConfig;
+use esrl_sim::{ActionMode, LimitModel, WalkConfig};
 
 #[test]
 fn bench_reports_what_it_ran() {
     let mut config = WalkConfig::default();
+    config.physics.substeps = 2;
     config.physics.solver_iterations = 3;
+    config.physics.joint_limits = LimitModel::Hard;
+    config.action = ActionMode::Target;
     let r = bench_walk(&config, 300, 11).unwrap();
     assert_eq!(r.steps, 300);
     assert!(r.steps_per_s > 0.0 && r.wall_s > 0.0);
@@ -17,9 +20,13 @@ fn bench_reports_what_it_ran() {
     // ended by a fall.
     assert!(r.episodes > 2, "{r:?}");
     assert_eq!(r.falls, r.episodes - 1);
-    assert_eq!((r.substeps, r.solver_iterations), (1, 3));
+    assert_eq!((r.substeps, r.solver_iterations), (2, 3));
+    assert_eq!(
+        (r.joint_limits, r.action),
+        (LimitModel::Hard, ActionMode::Target)
+    );
     assert_eq!(r.control_period, 0.025);
-    assert_eq!(r.dt, 0.025);
+    assert_eq!(r.dt, 0.0125);
     assert_eq!((r.obs_dim, r.act_dim), (43, 6));
     let bad = WalkConfig {
         control_period: -1.0,

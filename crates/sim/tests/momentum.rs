@@ -62,6 +62,7 @@ fn internal_torques_do_not_move_the_centre_of_mass() {
         gravity: 0.0,
         ..PhysicsConfig::default()
     };
+    let physics_substeps = physics.substeps as usize;
     let setup = SimSetup {
         dt: 0.025 / physics.substeps as f32,
         physics,
@@ -92,9 +93,15 @@ fn internal_torques_do_not_move_the_centre_of_mass() {
         ("left_ankle", 1.0, 5),
     ];
     let mut torso_moved = 0.0f32;
-    for k in 0..160 {
+    // 4 s whatever the physics step.
+    for k in 0..(4.0 / setup.dt).round() as usize {
         for (name, tau, period) in drive {
-            let sign = if (k / period) % 2 == 0 { 1.0 } else { -1.0 };
+            // Periods in control steps of 25 ms.
+            let sign = if (k / (period * physics_substeps)) % 2 == 0 {
+                1.0
+            } else {
+                -1.0
+            };
             sim.set_joint_torque(model.joint_index(name).unwrap(), sign * tau);
         }
         sim.step();

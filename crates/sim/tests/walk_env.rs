@@ -7,7 +7,7 @@
 // Index loops read like the vector formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use esrl_sim::{Env, GaitSample, SimError, Step, WalkConfig, WalkEnv};
+use esrl_sim::{Env, GaitSample, LimitModel, SimError, Step, WalkConfig, WalkEnv};
 
 /// The raw (SI) observation: the layout tests below check units and frames.
 fn env() -> WalkEnv {
@@ -88,7 +88,14 @@ fn dimensions_and_names_come_from_the_model() {
 
 #[test]
 fn observation_reward_and_gait_agree() {
-    let mut env = env();
+    // Hard limits: the applied torque is exactly action × effort (no fade), so the power can
+    // be checked against the joint angles alone.
+    let mut config = WalkConfig {
+        normalize_obs: false,
+        ..WalkConfig::default()
+    };
+    config.physics.joint_limits = LimitModel::Hard;
+    let mut env = WalkEnv::new(config).unwrap();
     let layout = env.obs_layout().clone();
     let weight = env.body_weight();
     let mut prev_obs = env.reset(5);
@@ -127,10 +134,16 @@ fn observation_reward_and_gait_agree() {
         let efforts = env.effort_limits();
         for j in 0..6 {
             assert_eq!(g.joint_torque[j], clamped[j] * efforts[j]);
+            // A constant torque's mean power over the period is τ·Δq/T (the physics steps'
+            // works telescope), Δq from this and the previous observation.
+            let dq = o[layout.joint_angles.start + j] - prev_obs[layout.joint_angles.start + j];
+            let p = g.joint_torque[j] * dq / env.control_period();
             assert!(
-                (g.joint_power[j] - g.joint_torque[j] * g.joint_velocity[j]).abs()
-                    <= 1e-3 * g.joint_power[j].abs().max(1.0)
+                (g.joint_power[j] - p).abs() <= 1e-3 * p.abs().max(1.0),
+                "joint {j}: power {} vs τ Δq / T = {p}",
+                g.joint_power[j]
             );
+            assert!(g.joint_abs_power[j] >= g.joint_power[j].abs() * (1.0 - 1e-6));
         }
         // Body-frame velocity rotated back to the world gives the forward velocity.
         let v_body: Vec<f32> = o[layout.linear_velocity.clone()].to_vec();
@@ -155,7 +168,7 @@ fn observation_reward_and_gait_agree() {
         }
         prev_world_v = Some(v_world);
         // Eq. 12 from the gait data, term by term.
-        let p = g.joint_power.iter().map(|p| p.abs()).sum::<f32>() / 6.0;
+        let p = g.joint_abs_power.iter().sum::<f32>() / 6.0;
         let expect = [
             ("forward", g.forward_velocity),
             ("lateral", -5.0 * g.lateral_offset.powi(2)),
@@ -380,6 +393,81 @@ fn bad_configs_name_the_field() {
             },
             "physics.actuator_armature",
         ),
+        (
+            {
+                let mut c = WalkConfig::default();
+                c.physics.limit_band = 0.0;
+                c
+            },
+            "physics.limit_band",
+        ),
+        (
+            {
+                let mut c = WalkConfig::default();
+                c.physics.limit_frequency = f32::NAN;
+                c
+            },
+            "physics.limit_frequency",
+        ),
+        (
+            {
+                let mut c = WalkConfig::default();
+                c.reward.action_sq = -0.1;
+                c
+            },
+            "reward.action_sq",
+        ),
+        (
+            {
+                let mut c = WalkConfig::default();
+                c.reward.torque_sq = f32::NAN;
+                c
+            },
+            "reward.torque_sq",
+        ),
+        (
+            {
+                let mut c = WalkConfig::default();
+                c.reward.forward_gate = Some(esrl_sim::UprightGate {
+                    max_tilt: 0.0,
+                    max_height_drop: 0.1,
+                });
+                c
+            },
+            "reward.forward_gate.max_tilt",
+        ),
+        (
+            {
+                let mut c = WalkConfig::default();
+                c.fall.max_lateral = Some(0.0);
+                c
+            },
+            "fall.max_lateral",
+        ),
+        (
+            {
+                let mut c = WalkConfig::default();
+                c.fall.max_yaw = Some(f32::INFINITY);
+                c
+            },
+            "fall.max_yaw",
+        ),
+        (
+            {
+                let mut c = WalkConfig::default();
+                c.reset.crouch = -0.1;
+                c
+            },
+            "reset.crouch",
+        ),
+        (
+            {
+                let mut c = WalkConfig::default();
+                c.target.stiffness = -1.0;
+                c
+            },
+            "target.stiffness",
+        ),
     ];
     for (config, field) in cases {
         match WalkEnv::new(config) {
@@ -398,6 +486,30 @@ fn bad_configs_name_the_field() {
         ..WalkConfig::default()
     };
     assert!(matches!(WalkEnv::new(c), Err(SimError::Model { field, .. }) if field == "foot_links"));
+    let mut c = WalkConfig {
+        actuated_joints: vec!["left_hip".into(), "left_knee".into()],
+        ..WalkConfig::default()
+    };
+    c.reset.pose = esrl_sim::ResetPose::Crouch;
+    assert!(matches!(WalkEnv::new(c), Err(SimError::Model { field, .. }) if field == "reset.pose"));
+    // `target` needs a range to map actions onto.
+    let urdf = esrl_sim::HUMANOID_URDF.replace(
+        r#"<joint name="left_knee" type="revolute">"#,
+        r#"<joint name="left_knee" type="continuous">"#,
+    );
+    let model = std::sync::Arc::new(esrl_sim::RobotModel::from_urdf_str(&urdf).unwrap());
+    let c = WalkConfig {
+        action: esrl_sim::ActionMode::Target,
+        ..WalkConfig::default()
+    };
+    match WalkEnv::from_model(model, c) {
+        Err(SimError::Model { field, reason }) => {
+            assert_eq!(field, "action");
+            assert!(reason.contains("left_knee"), "{reason}");
+        }
+        Err(e) => panic!("wrong error {e}"),
+        Ok(_) => panic!("accepted"),
+    }
 }
 
 #[test]
@@ -417,6 +529,30 @@ fn config_is_serde_with_defaults_and_no_unknown_fields() {
     assert_eq!(partial.reward, default.reward);
     assert!(serde_json::from_str::<WalkConfig>(r#"{"contol_period": 0.02}"#).is_err());
     assert!(serde_json::from_str::<WalkConfig>(r#"{"reward": {"alive_bonus": 1}}"#).is_err());
+    let options: WalkConfig = serde_json::from_str(
+        r#"{"action": "target", "physics": {"joint_limits": "soft"}, "reset": {"pose": "split"},
+            "reward": {"forward_gate": {"max_tilt": 0.3}}, "fall": {"max_yaw": 0.5}}"#,
+    )
+    .unwrap();
+    assert_eq!(options.action, esrl_sim::ActionMode::Target);
+    assert_eq!(options.physics.joint_limits, LimitModel::Soft);
+    assert_eq!(options.reset.pose, esrl_sim::ResetPose::Split);
+    let gate = options.reward.forward_gate.clone().unwrap();
+    assert_eq!(gate.max_tilt, 0.3);
+    assert_eq!(gate.max_height_drop, 0.15);
+    assert_eq!(options.fall.max_yaw, Some(0.5));
+    assert_eq!(options.fall.max_lateral, None);
+    let back: WalkConfig = serde_json::from_str(&serde_json::to_string(&options).unwrap()).unwrap();
+    assert_eq!(back, options);
+    for bad in [
+        r#"{"action": "torques"}"#,
+        r#"{"physics": {"joint_limits": "brace"}}"#,
+        r#"{"reset": {"pose": "standing", "depth": 1}}"#,
+        r#"{"target": {"kp": 1}}"#,
+        r#"{"reward": {"forward_gate": {"tilt": 1}}}"#,
+    ] {
+        assert!(serde_json::from_str::<WalkConfig>(bad).is_err(), "{bad}");
+    }
 }
 
 #[test]
