@@ -23,7 +23,8 @@ use esrl_nn::{
     Actor, ActorStepState, Adam, AdamConfig, Critic, Graph, LstmState, Module, NnError, Params,
     Tensor,
 };
-use rand::{Rng, SeedableRng};
+use esrl_streams::Stream;
+use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use serde::{Deserialize, Serialize};
@@ -198,7 +199,7 @@ impl Agent {
             obs_dim,
             act_dim,
             &nets.actor,
-            seed.wrapping_mul(31).wrapping_add(1),
+            Stream::ActorWeights.seed(seed),
         )?;
         let n_critics = if algo == Algo::Ddpg { 1 } else { 2 };
         let critics = (0..n_critics)
@@ -207,7 +208,7 @@ impl Agent {
                     obs_dim,
                     act_dim,
                     &nets.critic,
-                    seed.wrapping_mul(31).wrapping_add(2 + k as u64),
+                    Stream::CriticWeights(k as u64).seed(seed),
                 )
             })
             .collect::<Result<Vec<_>, _>>()?;
@@ -249,7 +250,7 @@ impl Agent {
             log_alpha,
             opt_alpha,
             updates: 0,
-            rng: ChaCha8Rng::seed_from_u64(seed ^ 0x5EED_A6E7),
+            rng: Stream::Updates.rng(seed),
         })
     }
 

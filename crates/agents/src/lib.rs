@@ -35,5 +35,5 @@ pub use agent::{ActMode, Agent, AgentError, Policy, UpdateStats};
 pub use config::{Algo, ConfigError, LearnEvery, RlConfig};
 pub use nets::NetConfig;
 pub use replay::{ReplayBuffer, SequenceBatch, Transition};
-pub use rollout::{mix_seed, rollout, Episode};
+pub use rollout::{rollout, Episode};
 pub use train::{EpisodeReport, Trainer};

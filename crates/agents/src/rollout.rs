@@ -5,16 +5,6 @@ use crate::replay::{ReplayBuffer, Transition};
 use esrl_sim::{Env, Step};
 use rand::Rng;
 
-/// Mixes a run seed with two indices into an independent 64-bit seed (SplitMix64 finaliser):
-/// every episode, individual and stream gets its own, whatever thread runs it.
-pub fn mix_seed(seed: u64, a: u64, b: u64) -> u64 {
-    let mut z =
-        seed ^ a.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ b.wrapping_mul(0xD1B5_4A32_D192_ED03);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 /// One finished episode: its transitions in order, its return and how it ended.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Episode {

@@ -3,9 +3,9 @@
 use crate::agent::{ActMode, Agent, AgentError, UpdateStats};
 use crate::config::{LearnEvery, RlConfig};
 use crate::replay::{ReplayBuffer, SequenceBatch, Transition};
-use crate::rollout::mix_seed;
 use esrl_sim::Env;
-use rand::{Rng, SeedableRng};
+use esrl_streams::Stream;
+use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
@@ -105,7 +105,7 @@ impl Trainer {
         Self {
             agent,
             buffer,
-            rng: ChaCha8Rng::seed_from_u64(mix_seed(seed, 0x7A, 0)),
+            rng: Stream::Trainer.rng(seed),
             seed,
             env_steps: 0,
             episodes: 0,
@@ -135,7 +135,7 @@ impl Trainer {
     /// Runs one training episode on `env`, learning along the way.
     pub fn episode(&mut self, env: &mut dyn Env) -> Result<EpisodeReport, AgentError> {
         let cfg = self.agent.config().clone();
-        let env_seed = mix_seed(self.seed, 1, self.episodes as u64);
+        let env_seed = Stream::EpisodeReset(self.episodes as u64).seed(self.seed);
         let mut obs = env.reset(env_seed);
         let q0 = self.agent.q0(&obs);
         let mut policy = self.agent.policy();

@@ -3,7 +3,7 @@
 //! ES-TD3, whose individuals act deterministically: replaying the best generation's episode
 //! (same reset seed) with the saved policy must give back the fitness it was kept for.
 
-use esrl_agents::mix_seed;
+use esrl_streams::Stream;
 use serde_json::Value;
 use std::process::Command;
 
@@ -67,8 +67,14 @@ fn best_folder_holds_the_policy_that_scored_the_best_curve_value() {
     assert_eq!(info["fitness"].as_f64().unwrap(), max);
     assert!(!run.join("best.tmp").exists() && !run.join("best.old").exists());
 
-    // Generation g's individuals all started from reset seed mix_seed(seed, 2, g) (K = 1).
-    let reset = mix_seed(3, 2, argmax as u64).to_string();
+    // Generation g's individuals all started from the same reset (K = 1).
+    let reset = Stream::EvaluationReset {
+        generation: argmax as u64,
+        evaluation: 0,
+        evaluations: 1,
+    }
+    .seed(3)
+    .to_string();
     let best = run.join("best");
     let report: Value = serde_json::from_str(&esrl(&[
         "eval",

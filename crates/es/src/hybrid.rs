@@ -34,10 +34,9 @@
 use crate::strategy::{rank, EsConfig, Fitness, LoopOrder, Strategy};
 use esrl_agents::rollout::{rollout, Actor as Acting};
 use esrl_agents::train::LossMeans;
-use esrl_agents::{mix_seed, ActMode, Agent, AgentError, Algo, Episode, Policy, Trainer};
+use esrl_agents::{ActMode, Agent, AgentError, Algo, Episode, Policy, Trainer};
 use esrl_sim::Env;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
+use esrl_streams::Stream;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -163,7 +162,7 @@ struct Evaluated {
 impl Hybrid {
     /// Starts the ES distribution at the agent's own genome.
     pub fn new(agent: Agent, es: EsConfig, inner_cycles: usize, seed: u64) -> Self {
-        let strategy = Strategy::new(agent.genome(), es.sigma, mix_seed(seed, 0xE5, 0));
+        let strategy = Strategy::new(agent.genome(), es.sigma, seed);
         Self {
             trainer: Trainer::new(agent, seed),
             strategy,
@@ -182,7 +181,7 @@ impl Hybrid {
         let target = self.trainer.agent.config().warm_start as u64;
         let mut taken = 0;
         while self.trainer.env_steps < target {
-            let seed = mix_seed(self.trainer.seed, 3, self.trainer.env_steps);
+            let seed = Stream::WarmStartReset(self.trainer.env_steps).seed(self.trainer.seed);
             let left = (target - self.trainer.env_steps) as usize;
             let ep = rollout(
                 env,
@@ -240,11 +239,20 @@ impl Hybrid {
         let evaluate_one = |i: usize, genome: &Vec<f32>| -> Result<Evaluated, AgentError> {
             let mut env = make_env();
             let mut policy: Policy = agent.policy_from_genome(genome)?;
-            let mut rng = ChaCha8Rng::seed_from_u64(mix_seed(seed, 4 + gen, i as u64));
+            let mut rng = Stream::Individual {
+                generation: gen,
+                index: i as u64,
+            }
+            .rng(seed);
             let mut episodes = Vec::with_capacity(k * plan.len());
             let mut score = 0.0;
             for e in 0..k {
-                let env_seed = mix_seed(seed, 2, gen * k as u64 + e as u64);
+                let env_seed = Stream::EvaluationReset {
+                    generation: gen,
+                    evaluation: e as u64,
+                    evaluations: k as u64,
+                }
+                .seed(seed);
                 for &(mode, scored) in plan {
                     let ep = rollout(
                         env.as_mut(),
@@ -344,7 +352,14 @@ impl Hybrid {
         let finite: Vec<f64> = fitness.iter().copied().filter(|f| f.is_finite()).collect();
         let mut env0 = make_env();
         let k = self.es.evaluations as u64;
-        let obs0 = env0.reset(mix_seed(self.trainer.seed, 2, self.generation as u64 * k));
+        let obs0 = env0.reset(
+            Stream::EvaluationReset {
+                generation: self.generation as u64,
+                evaluation: 0,
+                evaluations: k,
+            }
+            .seed(self.trainer.seed),
+        );
         let report = GenerationReport {
             generation: self.generation,
             env_steps: self.trainer.env_steps,

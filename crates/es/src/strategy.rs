@@ -7,12 +7,10 @@
 //!   weights; these favour better elites while keeping every elite's influence positive);
 //! - eq. 11: σ ← (1 − λ) σ + λ σ_min.
 //!
-//! Noise is drawn from a ChaCha8 stream keyed by (seed, generation, individual), so the
+//! Noise is drawn from the stream [`Stream::Perturbation`] of (generation, individual), so the
 //! population does not depend on which thread evaluates whom.
 
-use esrl_agents::mix_seed;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
+use esrl_streams::Stream;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
@@ -170,6 +168,7 @@ pub struct Strategy {
     pub sigma: f64,
     /// Generations completed.
     pub generation: u64,
+    /// The run seed the noise streams derive from.
     seed: u64,
 }
 
@@ -197,7 +196,8 @@ pub fn rank(fitness: &[f64]) -> Vec<usize> {
 }
 
 impl Strategy {
-    /// A strategy centred on `mean` with scale `sigma`; `seed` keys every noise stream.
+    /// A strategy centred on `mean` with scale `sigma`; the run seed `seed` keys every noise
+    /// stream.
     pub fn new(mean: Vec<f32>, sigma: f64, seed: u64) -> Self {
         Self {
             mean,
@@ -209,7 +209,11 @@ impl Strategy {
 
     /// Individual `index` of the current generation (eq. 8): θ + σ ε with ε from its own stream.
     pub fn perturbation(&self, index: usize) -> Vec<f32> {
-        let mut rng = ChaCha8Rng::seed_from_u64(mix_seed(self.seed, self.generation, index as u64));
+        let mut rng = Stream::Perturbation {
+            generation: self.generation,
+            index: index as u64,
+        }
+        .rng(self.seed);
         let sigma = self.sigma as f32;
         self.mean
             .iter()

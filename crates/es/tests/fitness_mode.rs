@@ -8,8 +8,9 @@ mod common;
 
 use common::{hybrid, make_env, pool};
 use esrl_agents::rollout::{rollout, Actor};
-use esrl_agents::{mix_seed, ActMode, Algo};
+use esrl_agents::{ActMode, Algo};
 use esrl_es::{EsConfig, Fitness, Hybrid};
+use esrl_streams::Stream;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
@@ -18,7 +19,12 @@ fn deterministic_return(h: &Hybrid, gen: u64) -> f64 {
     let mut policy = h.trainer.agent.policy_from_genome(&h.kept).unwrap();
     let mut env = make_env();
     let mut rng = ChaCha8Rng::seed_from_u64(0);
-    let seed = mix_seed(h.trainer.seed, 2, gen);
+    let seed = Stream::EvaluationReset {
+        generation: gen,
+        evaluation: 0,
+        evaluations: 1,
+    }
+    .seed(h.trainer.seed);
     rollout(
         env.as_mut(),
         Actor::Policy(&mut policy, ActMode::Deterministic),
