@@ -7,7 +7,10 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use crate::env::Env;
+use std::convert::Infallible;
+
+use crate::env::{Env, Step};
+use crate::episode::{hooks, run_episode};
 use crate::error::SimError;
 use crate::sim::LimitModel;
 use crate::walk::{ActionMode, WalkConfig, WalkEnv};
@@ -48,30 +51,32 @@ pub struct BenchReport {
 }
 
 /// Runs `steps` control steps of [`WalkEnv`] with uniformly random actions in `[-1, 1]`,
-/// resetting (seed `seed + episode`) whenever an episode ends, on the calling thread.
+/// episode after episode (episode `k` resets with seed `seed + k`), on the calling thread.
 pub fn bench_walk(config: &WalkConfig, steps: usize, seed: u64) -> Result<BenchReport, SimError> {
     let mut env = WalkEnv::new(config.clone())?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let act_dim = env.act_dim();
-    let mut action = vec![0.0f32; act_dim];
-    let start = Instant::now();
-    let mut episodes = 1;
     let mut falls = 0;
-    env.reset(seed);
-    for _ in 0..steps {
-        for a in action.iter_mut() {
-            *a = rng.random_range(-1.0..=1.0);
-        }
-        let step = env.step(&action);
-        if step.terminated || step.truncated {
-            if step.info.gait.as_ref().is_some_and(|g| g.fell) {
-                falls += 1;
+    let mut random = hooks(
+        |_: &[f32], action: &mut [f32]| {
+            for a in action.iter_mut() {
+                *a = rng.random_range(-1.0..=1.0);
             }
-            env.reset(seed.wrapping_add(episodes as u64));
-            episodes += 1;
-        }
+        },
+        |_: &WalkEnv, _: &[f32], _: &[f32], step: &Step| {
+            falls += usize::from(step.info.gait.as_ref().is_some_and(|g| g.fell));
+            Ok::<(), Infallible>(())
+        },
+    );
+    let start = Instant::now();
+    let (mut taken, mut episodes) = (0, 0);
+    while taken < steps {
+        let seed = seed.wrapping_add(episodes as u64);
+        let Ok(end) = run_episode(&mut env, seed, Some(steps - taken), &mut random);
+        taken += end.steps;
+        episodes += 1;
     }
     let wall_s = start.elapsed().as_secs_f64();
+    drop(random);
     let steps_per_s = if wall_s > 0.0 {
         steps as f64 / wall_s
     } else {
@@ -92,29 +97,33 @@ pub fn bench_walk(config: &WalkConfig, steps: usize, seed: u64) -> Result<BenchR
         action: config.action,
         seed,
         obs_dim: env.obs_dim(),
-        act_dim,
+        act_dim: env.act_dim(),
     })
 }
 
 /// Horizontal travel (m) of the torso from t = 1 s to t = 60 s of a rigid stance, or None if
 /// it fell: both hips and knees pressed into their limits at full effort (action
-/// `[1, −1, ankle, 1, −1, ankle]`) from a reset with `seed`. Such a body is a rigid object on
-/// flat ground, so it should not travel after the first second's lurch into the stance.
+/// `[1, −1, ankle, 1, −1, ankle]`) from a reset with `seed`, for at most 2400 steps. Such a
+/// body is a rigid object on flat ground, so it should not travel after the first second's
+/// lurch into the stance.
 pub fn rigid_stance_travel(env: &mut WalkEnv, seed: u64, ankle: f32) -> Option<f32> {
-    env.reset(seed);
-    let action = [1.0, -1.0, ankle, 1.0, -1.0, ankle];
+    let stance = [1.0, -1.0, ankle, 1.0, -1.0, ankle];
     let (mut start, mut end) = ([0.0f32; 3], [0.0f32; 3]);
-    for step in 1..=2400 {
-        let s = env.step(&action);
-        if let Some(g) = &s.info.gait {
-            if step == 40 {
-                start = g.torso_position;
+    let mut hook = hooks(
+        |_: &[f32], action: &mut [f32]| action.copy_from_slice(&stance),
+        |env: &WalkEnv, _: &[f32], _: &[f32], step: &Step| {
+            if let Some(g) = &step.info.gait {
+                if env.steps() == 40 {
+                    start = g.torso_position;
+                }
+                end = g.torso_position;
             }
-            end = g.torso_position;
-        }
-        if s.terminated {
-            return None;
-        }
+            Ok::<(), Infallible>(())
+        },
+    );
+    let Ok(episode) = run_episode(env, seed, Some(2400), &mut hook);
+    if episode.terminated {
+        return None;
     }
     Some((end[0] - start[0]).hypot(end[1] - start[1]))
 }

@@ -221,6 +221,7 @@
 
 pub mod bench;
 mod env;
+mod episode;
 mod error;
 mod math;
 mod model;
@@ -229,6 +230,7 @@ mod sim;
 pub mod walk;
 
 pub use env::{Env, GaitSample, Step, StepInfo};
+pub use episode::{hooks, run_episode, EpisodeEnd, EpisodeHook, Hooks};
 pub use error::{SimError, UrdfError};
 pub use model::{
     JointKind, JointModel, LinkGeometry, LinkModel, LinkPose, RobotModel, Shape, ShapeGeometry,

@@ -279,10 +279,11 @@ impl RobotSim {
         Ok(Self::build(model, setup, state))
     }
 
-    /// [`Self::new`] without the checks, for setups that already passed them.
+    /// [`Self::new`] without the checks, for setups that already passed them. The world is
+    /// built in Rapier insertion order, step by step: the ground, the links (bodies with
+    /// their mass properties, then their colliders), the joints, the joint state, and a
+    /// zero-length step that applies it all.
     pub(crate) fn build(model: Arc<RobotModel>, setup: &SimSetup, state: &RobotState) -> Self {
-        let root = model.root();
-        let n_joints = model.joints().len();
         let mut world = PhysicsWorld {
             gravity: Vector::new(0.0, 0.0, -setup.physics.gravity),
             ..PhysicsWorld::default()
@@ -290,199 +291,17 @@ impl RobotSim {
         world.integration_parameters.dt = setup.dt;
         world.integration_parameters.num_solver_iterations =
             setup.physics.solver_iterations as usize;
-
-        let friction = setup.physics.friction;
-        let ground = setup.ground.then(|| {
-            let body = world.insert_body(RigidBodyBuilder::fixed());
-            let collider = ColliderBuilder::cuboid(1000.0, 1000.0, 0.5)
-                .translation(Vector::new(0.0, 0.0, -0.5))
-                .friction(friction)
-                .collision_groups(InteractionGroups::new(
-                    GROUND_GROUP,
-                    ROBOT_GROUP,
-                    InteractionTestMode::And,
-                ));
-            world.insert_collider(collider, Some(body))
-        });
-
-        let base = Iso::from_translation(state.base_position);
-        let poses = model.forward_kinematics(&base, &state.q);
+        let ground = setup
+            .ground
+            .then(|| add_ground(&mut world, setup.physics.friction));
         // Rapier 0.36 treats the linear velocity of a free multibody root as the velocity of
         // its centre of mass but integrates it as the velocity of the body frame origin, so a
         // root whose centre of mass is off its frame origin does not conserve momentum. The
         // root body's frame is therefore placed at its centre of mass; `root_shift` converts.
-        let shift = model.links()[root].com;
-        let root_body = Iso::from_translation(shift);
-        let unshift = Iso::from_translation(math::scale(shift, -1.0));
-        let robot_filter = if setup.physics.self_collisions {
-            ROBOT_GROUP | GROUND_GROUP
-        } else {
-            GROUND_GROUP
-        };
-        let mut bodies = vec![RigidBodyHandle::invalid(); model.links().len()];
-        let mut colliders = vec![Vec::new(); model.links().len()];
-        let mut link_order = vec![root];
-        link_order.extend(model.joint_order().iter().map(|&j| model.joints()[j].child));
-        for &l in &link_order {
-            let link = &model.links()[l];
-            let mut builder = if l == root && setup.base == Base::Fixed {
-                RigidBodyBuilder::fixed()
-            } else {
-                RigidBodyBuilder::dynamic()
-            }
-            .pose(
-                if l == root {
-                    poses[l].mul(&root_body)
-                } else {
-                    poses[l]
-                }
-                .to_pose(),
-            )
-            .can_sleep(false);
-            if link.mass > 0.0 {
-                let c = if l == root { [0.0; 3] } else { link.com };
-                let mut inertia = [[0.0f32; 3]; 3];
-                for (r, row) in inertia.iter_mut().enumerate() {
-                    for (k, v) in row.iter_mut().enumerate() {
-                        *v = link.inertia[r][k] as f32;
-                    }
-                }
-                // glam matrices are column-major; the tensor is symmetric, so either reading works.
-                let m = Matrix::from_cols_array_2d(&inertia);
-                builder = builder.additional_mass_properties(MassProperties::with_inertia_matrix(
-                    Vector::new(c[0] as f32, c[1] as f32, c[2] as f32),
-                    link.mass as f32,
-                    m,
-                ));
-            }
-            let handle = world.insert_body(builder);
-            bodies[l] = handle;
-            for (origin, shape) in &link.shapes {
-                let (builder, extra) = match *shape {
-                    Shape::Box { size } => (
-                        ColliderBuilder::cuboid(size[0] / 2.0, size[1] / 2.0, size[2] / 2.0),
-                        math::IDENTITY,
-                    ),
-                    Shape::Sphere { radius } => (ColliderBuilder::ball(radius), math::IDENTITY),
-                    // Rapier cylinders run along y, URDF ones along z: rotate y onto z.
-                    Shape::Cylinder { radius, length } => (
-                        ColliderBuilder::cylinder(length / 2.0, radius),
-                        math::axis_angle([1.0, 0.0, 0.0], std::f64::consts::FRAC_PI_2),
-                    ),
-                };
-                let mut pose = origin.mul(&Iso::from_rotation(extra));
-                if l == root {
-                    pose = unshift.mul(&pose);
-                }
-                let pose = pose.to_pose();
-                let collider = builder
-                    .position(pose)
-                    .density(0.0)
-                    .friction(friction)
-                    .collision_groups(InteractionGroups::new(
-                        ROBOT_GROUP,
-                        robot_filter,
-                        InteractionTestMode::And,
-                    ));
-                colliders[l].push(world.insert_collider(collider, Some(handle)));
-            }
-        }
-
-        let mut axis_in_parent = vec![Vector::X; n_joints];
-        for &ji in model.joint_order() {
-            let j = &model.joints()[ji];
-            let (locked, frame_rot) = match j.kind {
-                JointKind::Fixed => (JointAxesMask::LOCKED_FIXED_AXES, math::IDENTITY),
-                _ => (JointAxesMask::LOCKED_REVOLUTE_AXES, math::x_onto(j.axis)),
-            };
-            let mut frame1 = j.origin.mul(&Iso::from_rotation(frame_rot));
-            if j.parent == root {
-                frame1 = unshift.mul(&frame1);
-            }
-            let frame2 = Iso::from_rotation(frame_rot);
-            let mut builder = GenericJointBuilder::new(locked)
-                .local_frame1(frame1.to_pose())
-                .local_frame2(frame2.to_pose())
-                .contacts_enabled(false);
-            if let Some([lo, hi]) = j.limits {
-                builder = builder.limits(JointAxis::AngX, [lo as f32, hi as f32]);
-                if setup.physics.joint_limits == LimitModel::Soft {
-                    // For multibody joints the softness only acts on limits (and friction).
-                    builder = builder.softness(SpringCoefficients::new(
-                        setup.physics.limit_frequency,
-                        setup.physics.limit_damping_ratio,
-                    ));
-                }
-            }
-            let a = math::mat_vec(&j.origin.r, j.axis);
-            axis_in_parent[ji] = Vector::new(a[0] as f32, a[1] as f32, a[2] as f32);
-            // Insertion only fails for a link that already has a parent or would close a loop,
-            // which a validated (tree) model never asks for.
-            let _ = world.multibody_joints.insert(
-                bodies[j.parent],
-                bodies[j.child],
-                builder.build(),
-                true,
-            );
-        }
-
-        let mut multibody = None;
-        let mut link_ids = vec![0usize; n_joints];
-        // Rapier only creates multibodies through joints: a lone link stays a plain rigid body.
-        if let Some(id) = world
-            .multibody_joints
-            .rigid_body_link(bodies[root])
-            .copied()
-        {
-            let index = id.multibody;
-            multibody = Some(index);
-            for (ji, j) in model.joints().iter().enumerate() {
-                if let Some(link) = world.multibody_joints.rigid_body_link(bodies[j.child]) {
-                    link_ids[ji] = link.id;
-                }
-            }
-            let world_bodies = &world.bodies;
-            if let Some(mb) = world.multibody_joints.get_multibody_mut(index) {
-                mb.set_self_contacts_enabled(setup.physics.self_collisions);
-                for (ji, j) in model.joints().iter().enumerate() {
-                    if j.kind == JointKind::Fixed {
-                        continue;
-                    }
-                    let q = state.q.get(ji).copied().unwrap_or(0.0) as f32;
-                    if let Some(link) = mb.link_mut(link_ids[ji]) {
-                        link.joint.apply_displacement(&[q]);
-                    }
-                }
-                // Resolves the root type (fixed roots drop their 6 free DoFs) and poses.
-                mb.forward_kinematics(world_bodies, true);
-            }
-            if let Some(mb) = world.multibody_joints.get_multibody(index) {
-                mb.update_rigid_bodies(&mut world.bodies, true);
-            }
-            if let Some(mb) = world.multibody_joints.get_multibody_mut(index) {
-                // Rapier gives every angular DoF (the free root's too) a default damping of
-                // 0.1; the URDF's <dynamics> is the only damping we want.
-                mb.damping_mut().fill(0.0);
-                let mut dofs = Vec::new();
-                for (ji, j) in model.joints().iter().enumerate() {
-                    if j.kind == JointKind::Fixed {
-                        continue;
-                    }
-                    if let Some(link) = mb.link(link_ids[ji]) {
-                        dofs.push((link.assembly_id(), ji));
-                    }
-                }
-                for &(dof, ji) in &dofs {
-                    let j = &model.joints()[ji];
-                    mb.armature_mut()[dof] =
-                        setup.armature.get(ji).copied().unwrap_or(0.0).max(0.0);
-                    mb.damping_mut()[dof] = j.damping as f32;
-                    mb.frictions_mut()[dof] = j.friction as f32;
-                    mb.generalized_velocity_mut()[dof] =
-                        state.qd.get(ji).copied().unwrap_or(0.0) as f32;
-                }
-            }
-        }
+        let shift = model.links()[model.root()].com;
+        let (bodies, colliders) = add_links(&mut world, &model, setup, state, shift);
+        let axis_in_parent = add_joints(&mut world, &model, setup, &bodies, shift);
+        let (multibody, link_ids) = set_joint_state(&mut world, &model, setup, state, &bodies);
 
         // A zero-length step applies the pending changes (mass properties, collision pairs)
         // so that the world can be queried before its first real step.
@@ -490,6 +309,7 @@ impl RobotSim {
         world.step();
         world.integration_parameters.dt = setup.dt;
 
+        let n_joints = model.joints().len();
         Self {
             root_shift: Vector::new(shift[0] as f32, shift[1] as f32, shift[2] as f32),
             world,
@@ -874,4 +694,233 @@ impl RobotSim {
     pub fn world(&self) -> &PhysicsWorld {
         &self.world
     }
+}
+
+/// The flat ground: a fixed box whose top face is z = 0, colliding with the robot only.
+fn add_ground(world: &mut PhysicsWorld, friction: f32) -> ColliderHandle {
+    let body = world.insert_body(RigidBodyBuilder::fixed());
+    let collider = ColliderBuilder::cuboid(1000.0, 1000.0, 0.5)
+        .translation(Vector::new(0.0, 0.0, -0.5))
+        .friction(friction)
+        .collision_groups(InteractionGroups::new(
+            GROUND_GROUP,
+            ROBOT_GROUP,
+            InteractionTestMode::And,
+        ));
+    world.insert_collider(collider, Some(body))
+}
+
+/// One rigid body per link, root first then in joint order, posed by forward kinematics of
+/// `state` with the URDF's mass, centre of mass and inertia, and its collision shapes.
+/// The root body's frame sits at its centre of mass (`shift` from its link frame). Returns
+/// the body and the colliders of each link, in URDF link order.
+fn add_links(
+    world: &mut PhysicsWorld,
+    model: &RobotModel,
+    setup: &SimSetup,
+    state: &RobotState,
+    shift: [f64; 3],
+) -> (Vec<RigidBodyHandle>, Vec<Vec<ColliderHandle>>) {
+    let root = model.root();
+    let base = Iso::from_translation(state.base_position);
+    let poses = model.forward_kinematics(&base, &state.q);
+    let root_body = Iso::from_translation(shift);
+    let unshift = Iso::from_translation(math::scale(shift, -1.0));
+    let robot_filter = if setup.physics.self_collisions {
+        ROBOT_GROUP | GROUND_GROUP
+    } else {
+        GROUND_GROUP
+    };
+    let mut bodies = vec![RigidBodyHandle::invalid(); model.links().len()];
+    let mut colliders = vec![Vec::new(); model.links().len()];
+    let mut link_order = vec![root];
+    link_order.extend(model.joint_order().iter().map(|&j| model.joints()[j].child));
+    for &l in &link_order {
+        let link = &model.links()[l];
+        let mut builder = if l == root && setup.base == Base::Fixed {
+            RigidBodyBuilder::fixed()
+        } else {
+            RigidBodyBuilder::dynamic()
+        }
+        .pose(
+            if l == root {
+                poses[l].mul(&root_body)
+            } else {
+                poses[l]
+            }
+            .to_pose(),
+        )
+        .can_sleep(false);
+        if link.mass > 0.0 {
+            let c = if l == root { [0.0; 3] } else { link.com };
+            let mut inertia = [[0.0f32; 3]; 3];
+            for (r, row) in inertia.iter_mut().enumerate() {
+                for (k, v) in row.iter_mut().enumerate() {
+                    *v = link.inertia[r][k] as f32;
+                }
+            }
+            // glam matrices are column-major; the tensor is symmetric, so either reading works.
+            let m = Matrix::from_cols_array_2d(&inertia);
+            builder = builder.additional_mass_properties(MassProperties::with_inertia_matrix(
+                Vector::new(c[0] as f32, c[1] as f32, c[2] as f32),
+                link.mass as f32,
+                m,
+            ));
+        }
+        let handle = world.insert_body(builder);
+        bodies[l] = handle;
+        for (origin, shape) in &link.shapes {
+            let mut pose = origin.mul(&Iso::from_rotation(shape_frame(shape)));
+            if l == root {
+                pose = unshift.mul(&pose);
+            }
+            let collider = collider_of(shape)
+                .position(pose.to_pose())
+                .density(0.0)
+                .friction(setup.physics.friction)
+                .collision_groups(InteractionGroups::new(
+                    ROBOT_GROUP,
+                    robot_filter,
+                    InteractionTestMode::And,
+                ));
+            colliders[l].push(world.insert_collider(collider, Some(handle)));
+        }
+    }
+    (bodies, colliders)
+}
+
+/// The Rapier collider of a URDF primitive, in the primitive's frame after [`shape_frame`].
+fn collider_of(shape: &Shape) -> ColliderBuilder {
+    match *shape {
+        Shape::Box { size } => ColliderBuilder::cuboid(size[0] / 2.0, size[1] / 2.0, size[2] / 2.0),
+        Shape::Sphere { radius } => ColliderBuilder::ball(radius),
+        Shape::Cylinder { radius, length } => ColliderBuilder::cylinder(length / 2.0, radius),
+    }
+}
+
+/// The rotation from a URDF primitive's frame to its Rapier collider's: Rapier cylinders run
+/// along y, URDF ones along z, so y is rotated onto z; boxes and spheres need none.
+fn shape_frame(shape: &Shape) -> [[f64; 3]; 3] {
+    match shape {
+        Shape::Cylinder { .. } => math::axis_angle([1.0, 0.0, 0.0], std::f64::consts::FRAC_PI_2),
+        Shape::Box { .. } | Shape::Sphere { .. } => math::IDENTITY,
+    }
+}
+
+/// One multibody joint per URDF joint, in joint order: revolute (the URDF axis mapped onto
+/// the joint's x) with its limits (and their softness under the `soft` limit model), or
+/// fixed. Returns each joint's unit axis in its parent link frame.
+fn add_joints(
+    world: &mut PhysicsWorld,
+    model: &RobotModel,
+    setup: &SimSetup,
+    bodies: &[RigidBodyHandle],
+    shift: [f64; 3],
+) -> Vec<Vector> {
+    let root = model.root();
+    let unshift = Iso::from_translation(math::scale(shift, -1.0));
+    let mut axis_in_parent = vec![Vector::X; model.joints().len()];
+    for &ji in model.joint_order() {
+        let j = &model.joints()[ji];
+        let (locked, frame_rot) = match j.kind {
+            JointKind::Fixed => (JointAxesMask::LOCKED_FIXED_AXES, math::IDENTITY),
+            _ => (JointAxesMask::LOCKED_REVOLUTE_AXES, math::x_onto(j.axis)),
+        };
+        let mut frame1 = j.origin.mul(&Iso::from_rotation(frame_rot));
+        if j.parent == root {
+            frame1 = unshift.mul(&frame1);
+        }
+        let frame2 = Iso::from_rotation(frame_rot);
+        let mut builder = GenericJointBuilder::new(locked)
+            .local_frame1(frame1.to_pose())
+            .local_frame2(frame2.to_pose())
+            .contacts_enabled(false);
+        if let Some([lo, hi]) = j.limits {
+            builder = builder.limits(JointAxis::AngX, [lo as f32, hi as f32]);
+            if setup.physics.joint_limits == LimitModel::Soft {
+                // For multibody joints the softness only acts on limits (and friction).
+                builder = builder.softness(SpringCoefficients::new(
+                    setup.physics.limit_frequency,
+                    setup.physics.limit_damping_ratio,
+                ));
+            }
+        }
+        let a = math::mat_vec(&j.origin.r, j.axis);
+        axis_in_parent[ji] = Vector::new(a[0] as f32, a[1] as f32, a[2] as f32);
+        // Insertion only fails for a link that already has a parent or would close a loop,
+        // which a validated (tree) model never asks for.
+        let _ =
+            world
+                .multibody_joints
+                .insert(bodies[j.parent], bodies[j.child], builder.build(), true);
+    }
+    axis_in_parent
+}
+
+/// Puts the joints at `state` (positions, then velocities) and sets each degree of freedom's
+/// armature, damping and friction from the setup and the URDF (and nothing else: Rapier's
+/// default damping is removed). Returns the multibody and, per joint, the multibody link id
+/// of its child; a model without joints has no multibody (Rapier makes one only through
+/// joints).
+fn set_joint_state(
+    world: &mut PhysicsWorld,
+    model: &RobotModel,
+    setup: &SimSetup,
+    state: &RobotState,
+    bodies: &[RigidBodyHandle],
+) -> (Option<MultibodyIndex>, Vec<usize>) {
+    let mut link_ids = vec![0usize; model.joints().len()];
+    let Some(id) = world
+        .multibody_joints
+        .rigid_body_link(bodies[model.root()])
+        .copied()
+    else {
+        return (None, link_ids);
+    };
+    let index = id.multibody;
+    for (ji, j) in model.joints().iter().enumerate() {
+        if let Some(link) = world.multibody_joints.rigid_body_link(bodies[j.child]) {
+            link_ids[ji] = link.id;
+        }
+    }
+    let world_bodies = &world.bodies;
+    if let Some(mb) = world.multibody_joints.get_multibody_mut(index) {
+        mb.set_self_contacts_enabled(setup.physics.self_collisions);
+        for (ji, j) in model.joints().iter().enumerate() {
+            if j.kind == JointKind::Fixed {
+                continue;
+            }
+            let q = state.q.get(ji).copied().unwrap_or(0.0) as f32;
+            if let Some(link) = mb.link_mut(link_ids[ji]) {
+                link.joint.apply_displacement(&[q]);
+            }
+        }
+        // Resolves the root type (fixed roots drop their 6 free DoFs) and poses.
+        mb.forward_kinematics(world_bodies, true);
+    }
+    if let Some(mb) = world.multibody_joints.get_multibody(index) {
+        mb.update_rigid_bodies(&mut world.bodies, true);
+    }
+    if let Some(mb) = world.multibody_joints.get_multibody_mut(index) {
+        // Rapier gives every angular DoF (the free root's too) a default damping of 0.1; the
+        // URDF's <dynamics> is the only damping we want.
+        mb.damping_mut().fill(0.0);
+        let mut dofs = Vec::new();
+        for (ji, j) in model.joints().iter().enumerate() {
+            if j.kind == JointKind::Fixed {
+                continue;
+            }
+            if let Some(link) = mb.link(link_ids[ji]) {
+                dofs.push((link.assembly_id(), ji));
+            }
+        }
+        for &(dof, ji) in &dofs {
+            let j = &model.joints()[ji];
+            mb.armature_mut()[dof] = setup.armature.get(ji).copied().unwrap_or(0.0).max(0.0);
+            mb.damping_mut()[dof] = j.damping as f32;
+            mb.frictions_mut()[dof] = j.friction as f32;
+            mb.generalized_velocity_mut()[dof] = state.qd.get(ji).copied().unwrap_or(0.0) as f32;
+        }
+    }
+    (Some(index), link_ids)
 }

@@ -1,0 +1,381 @@
+//! The walking task's settings ([`WalkConfig`] and its parts): every field documents its
+//! default and where it comes from; [`WalkConfig::validate`] names the field at fault.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::SimError;
+use crate::model::RobotModel;
+use crate::sim::PhysicsConfig;
+
+/// Reward coefficients of paper eq. 12.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct RewardConfig {
+    /// Weight of the forward velocity `vx`. Default 1 (eq. 12).
+    pub forward: f32,
+    /// Weight of the lateral penalty `y²`. Default 5 (eq. 12).
+    pub lateral: f32,
+    /// Weight of the vertical penalty `z²`. Default 25 (eq. 12).
+    pub height: f32,
+    /// Weight of the power penalty `P`. Default 0.0005 (eq. 12).
+    pub power: f32,
+    /// Constant reward per step for staying up, not paid on a step that ends in a fall or
+    /// off course. Default 0.025 (eq. 12).
+    pub alive: f32,
+    /// Weight of the squared-action penalty `Σ aᵢ²` over the actuated joints (the clamped
+    /// action of the step). Default 0 (the paper has none; MATLAB's walking-robot examples
+    /// use 0.02).
+    pub action_sq: f32,
+    /// Weight of the squared-torque penalty `Σ (τᵢ/τmaxᵢ)²`, τᵢ the torque the actuator
+    /// delivered (mean over the control period's physics steps, servo torque included) and
+    /// τmaxᵢ its effort limit. Unlike the power term it prices holding a load still. Default
+    /// 0 (the paper has none).
+    pub torque_sq: f32,
+    /// Pay the forward term only while the torso is upright and tall (DeepMind Control's
+    /// walker multiplies its move reward by its stand reward): when set, `w_v·vx` is replaced
+    /// by 0 on steps where the torso tilts more than `max_tilt` or is lower than
+    /// `max_height_drop` under its standing height. Default none (eq. 12 pays it always).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub forward_gate: Option<UprightGate>,
+}
+
+impl Default for RewardConfig {
+    fn default() -> Self {
+        Self {
+            forward: 1.0,
+            lateral: 5.0,
+            height: 25.0,
+            power: 0.0005,
+            alive: 0.025,
+            action_sq: 0.0,
+            torque_sq: 0.0,
+            forward_gate: None,
+        }
+    }
+}
+
+/// When the torso counts as upright and tall ([`RewardConfig::forward_gate`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct UprightGate {
+    /// Largest tilt of the torso's z axis from vertical, rad. Default 0.35 (20°, our choice:
+    /// the paper's gaits stay within a few degrees).
+    pub max_tilt: f32,
+    /// Largest drop of the torso origin below its standing height, m. Default 0.15 (our
+    /// choice: half the fall threshold).
+    pub max_height_drop: f32,
+}
+
+impl Default for UprightGate {
+    fn default() -> Self {
+        Self {
+            max_tilt: 20.0f32.to_radians(),
+            max_height_drop: 0.15,
+        }
+    }
+}
+
+/// When an episode ends in a fall.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FallConfig {
+    /// Fall when the torso origin is more than this below its standing height, m. Default 0.30
+    /// (our choice: the paper's walking gaits stay within ±0.12 m, a deep squat does not).
+    pub max_height_drop: f32,
+    /// Fall when the torso's z axis is tilted more than this from vertical, rad. Default
+    /// π/4 (45°, our choice, as MATLAB's walking-robot examples stop at 45° roll/pitch).
+    pub max_tilt: f32,
+    /// End the episode off course when the torso origin is more than this from the track
+    /// centre line (`|y|`), m. Default none (the paper has no such termination).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_lateral: Option<f32>,
+    /// End the episode off course when the torso's heading (yaw, the rotation of its x axis
+    /// about world z) is more than this from the track direction, rad. Default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_yaw: Option<f32>,
+}
+
+impl Default for FallConfig {
+    fn default() -> Self {
+        Self {
+            max_height_drop: 0.30,
+            max_tilt: std::f32::consts::FRAC_PI_4,
+            max_lateral: None,
+            max_yaw: None,
+        }
+    }
+}
+
+/// The pose a reset starts from, before [`InitNoise`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ResetPose {
+    /// [`WalkConfig::standing_pose`].
+    Standing,
+    /// The standing pose lowered by [`ResetConfig::crouch`] (see there).
+    Crouch,
+    /// The standing pose with the legs apart by [`ResetConfig::split`] (see there).
+    Split,
+    /// One of the three above, drawn uniformly from the reset seed.
+    Mixed,
+}
+
+/// Where episodes start ([`WalkConfig::reset`]).
+///
+/// `crouch` and `split` read the actuated joints as (hip, knee, ankle) of each leg in turn,
+/// as the default `actuated_joints` list them, and keep each foot at the standing pose's
+/// angle to the torso (hip + knee + ankle unchanged), so the feet start flat.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ResetConfig {
+    /// The pose. Default `standing` (SPEC §2: "standing pose with small seeded
+    /// perturbations").
+    pub pose: ResetPose,
+    /// `crouch` depth `c`, rad: hips −c, knees +2c, ankles −c from the standing pose (the
+    /// thighs and shanks tilt by `c` each, the torso stays upright). Default 10° (0.1745),
+    /// which the ankles' −20° limit allows from the standing −8°.
+    pub crouch: f32,
+    /// `split` half-angle `s`, rad: the leading leg's hip −s and ankle +s, the trailing
+    /// leg's hip +s and ankle −s; which leg leads is drawn from the reset seed. The feet stay
+    /// flat but not level: the robot is placed with its lowest point on the ground and the
+    /// other foot starts up to about a centimetre above it. Default 10° (0.1745).
+    pub split: f32,
+}
+
+impl Default for ResetConfig {
+    fn default() -> Self {
+        Self {
+            pose: ResetPose::Standing,
+            crouch: 10.0f32.to_radians(),
+            split: 10.0f32.to_radians(),
+        }
+    }
+}
+
+/// How an action drives the actuated joints ([`WalkConfig::action`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ActionMode {
+    /// `τ = a·τmax`, held for the control period (the paper's).
+    Torque,
+    /// `a` sets a joint angle target, tracked by an in-solver position servo (module docs,
+    /// "Action").
+    Target,
+}
+
+/// Gains of the `target` action mode's servos ([`WalkConfig::target`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TargetGains {
+    /// Stiffness `kp`, N·m/rad, every actuated joint. Default 1500 (module docs, "Action":
+    /// above the ≈ 620 N·m/rad the ankles need to hold the 70 kg body upright, and full
+    /// effort at 5.7° of error).
+    pub stiffness: f32,
+    /// Damping `kd`, N·m·s/rad. Default 60 (module docs, "Action").
+    pub damping: f32,
+}
+
+impl Default for TargetGains {
+    fn default() -> Self {
+        Self {
+            stiffness: 1500.0,
+            damping: 60.0,
+        }
+    }
+}
+
+/// Seeded perturbation of the standing pose at reset (uniform, ± the given half-widths).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct InitNoise {
+    /// Joint angle half-width, rad. Default 0.01 (Gymnasium Humanoid-v5 `reset_noise_scale`).
+    pub joint_angle: f32,
+    /// Joint velocity half-width, rad/s. Default 0.01 (Gymnasium Humanoid-v5).
+    pub joint_velocity: f32,
+}
+
+impl Default for InitNoise {
+    fn default() -> Self {
+        Self {
+            joint_angle: 0.01,
+            joint_velocity: 0.01,
+        }
+    }
+}
+
+/// Configuration of [`WalkEnv`](super::WalkEnv). Every field has a default; TOML files may give any subset.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct WalkConfig {
+    /// URDF file to load instead of the embedded humanoid. Default none (embedded
+    /// `assets/humanoid.urdf`, SPEC §1).
+    pub urdf: Option<PathBuf>,
+    /// Control period Ts, s. Default 0.025 (paper §5).
+    pub control_period: f32,
+    /// Episode length Tf, s; truncation after `Tf / Ts` steps. Default 60 (paper §5).
+    pub episode_seconds: f32,
+    /// Track length, m: success (termination) when the torso passes `x = track_length`.
+    /// Default 50 (paper Fig. 4).
+    pub track_length: f32,
+    /// Physics settings (step, solver, contact).
+    pub physics: PhysicsConfig,
+    /// Reward coefficients (paper eq. 12).
+    pub reward: RewardConfig,
+    /// Fall thresholds.
+    pub fall: FallConfig,
+    /// Reset noise.
+    pub init_noise: InitNoise,
+    /// Reset pose.
+    pub reset: ResetConfig,
+    /// How actions drive the joints: `torque` or `target`. Default `torque` (paper §5).
+    pub action: ActionMode,
+    /// Servo gains of the `target` action mode.
+    pub target: TargetGains,
+    /// Multiply the observation by the fixed per-quantity factors of the module docs
+    /// ([`WalkEnv::obs_scale`](super::WalkEnv::obs_scale)) so every entry is of order one. Default true (esrl's choice:
+    /// the raw values span three orders of magnitude, accelerations reach 160 m/s²).
+    pub normalize_obs: bool,
+    /// Torque-controlled joints, in action order. Default the six leg joints `left_hip,
+    /// left_knee, left_ankle, right_hip, right_knee, right_ankle` (SPEC §1).
+    pub actuated_joints: Vec<String>,
+    /// Left and right foot links (contact-force observations). Default `left_foot, right_foot`.
+    pub foot_links: [String; 2],
+    /// Standing pose, joint name → angle (rad); unlisted joints stand at 0 clamped into their
+    /// limits. Default hips −2°, knees 10°, ankles −8°: knees bent (≥ 5°, paper §5), torso
+    /// upright, feet flat, and the body leaning forward so that the centre of mass lies 4.6 cm
+    /// in front of the ankles, as in quiet human standing (Winter 1995, "Human balance and
+    /// posture control during standing and walking", Gait & Posture 3:193–214).
+    pub standing_pose: BTreeMap<String, f32>,
+}
+
+impl Default for WalkConfig {
+    fn default() -> Self {
+        let deg = std::f32::consts::PI / 180.0;
+        let mut standing_pose = BTreeMap::new();
+        for side in ["left", "right"] {
+            standing_pose.insert(format!("{side}_hip"), -2.0 * deg);
+            standing_pose.insert(format!("{side}_knee"), 10.0 * deg);
+            standing_pose.insert(format!("{side}_ankle"), -8.0 * deg);
+        }
+        Self {
+            urdf: None,
+            control_period: 0.025,
+            episode_seconds: 60.0,
+            track_length: 50.0,
+            physics: PhysicsConfig::default(),
+            reward: RewardConfig::default(),
+            fall: FallConfig::default(),
+            init_noise: InitNoise::default(),
+            reset: ResetConfig::default(),
+            action: ActionMode::Torque,
+            target: TargetGains::default(),
+            normalize_obs: true,
+            actuated_joints: [
+                "left_hip",
+                "left_knee",
+                "left_ankle",
+                "right_hip",
+                "right_knee",
+                "right_ankle",
+            ]
+            .map(String::from)
+            .to_vec(),
+            foot_links: ["left_foot".into(), "right_foot".into()],
+            standing_pose,
+        }
+    }
+}
+
+fn config_err(field: &str, value: impl ToString, reason: &str) -> SimError {
+    SimError::Config {
+        field: field.to_owned(),
+        value: value.to_string(),
+        reason: reason.to_owned(),
+    }
+}
+
+impl WalkConfig {
+    /// Checks every value, naming the field at fault.
+    pub fn validate(&self) -> Result<(), SimError> {
+        let pos = |field: &str, v: f32| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(config_err(field, v, "must be finite and > 0"))
+            }
+        };
+        let nonneg = |field: &str, v: f32| {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(config_err(field, v, "must be finite and ≥ 0"))
+            }
+        };
+        let fin = |field: &str, v: f32| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(config_err(field, v, "must be finite"))
+            }
+        };
+        pos("control_period", self.control_period)?;
+        pos("episode_seconds", self.episode_seconds)?;
+        if self.episode_seconds / self.control_period > 1e8 {
+            return Err(config_err(
+                "episode_seconds",
+                self.episode_seconds,
+                "gives more than 1e8 steps per episode",
+            ));
+        }
+        pos("track_length", self.track_length)?;
+        self.physics.validate("physics.")?;
+        fin("reward.forward", self.reward.forward)?;
+        fin("reward.lateral", self.reward.lateral)?;
+        fin("reward.height", self.reward.height)?;
+        fin("reward.power", self.reward.power)?;
+        fin("reward.alive", self.reward.alive)?;
+        nonneg("reward.action_sq", self.reward.action_sq)?;
+        nonneg("reward.torque_sq", self.reward.torque_sq)?;
+        if let Some(g) = &self.reward.forward_gate {
+            pos("reward.forward_gate.max_tilt", g.max_tilt)?;
+            pos("reward.forward_gate.max_height_drop", g.max_height_drop)?;
+        }
+        pos("fall.max_height_drop", self.fall.max_height_drop)?;
+        pos("fall.max_tilt", self.fall.max_tilt)?;
+        if let Some(v) = self.fall.max_lateral {
+            pos("fall.max_lateral", v)?;
+        }
+        if let Some(v) = self.fall.max_yaw {
+            pos("fall.max_yaw", v)?;
+        }
+        nonneg("reset.crouch", self.reset.crouch)?;
+        nonneg("reset.split", self.reset.split)?;
+        nonneg("target.stiffness", self.target.stiffness)?;
+        nonneg("target.damping", self.target.damping)?;
+        nonneg("init_noise.joint_angle", self.init_noise.joint_angle)?;
+        nonneg("init_noise.joint_velocity", self.init_noise.joint_velocity)?;
+        if self.actuated_joints.is_empty() {
+            return Err(config_err(
+                "actuated_joints",
+                "[]",
+                "needs at least one joint",
+            ));
+        }
+        for (name, v) in &self.standing_pose {
+            fin(&format!("standing_pose.{name}"), *v)?;
+        }
+        Ok(())
+    }
+
+    /// Loads the model this config names (the embedded humanoid by default).
+    pub fn load_model(&self) -> Result<Arc<RobotModel>, SimError> {
+        Ok(match &self.urdf {
+            Some(path) => Arc::new(RobotModel::from_urdf_path(path)?),
+            None => RobotModel::humanoid_shared()?,
+        })
+    }
+}

@@ -1,0 +1,492 @@
+//! `WalkEnv`: the humanoid on the 50 m flat track (SPEC §2, paper §5).
+//!
+//! # Observation (43 values for the embedded humanoid)
+//!
+//! Sizes follow the model: `n_a` actuated joints, `n_p` passive (non-actuated, movable)
+//! joints, in URDF order. All values are SI before scaling (see Scaling below), f32; "body
+//! frame" is the torso link frame.
+//!
+//! | index (humanoid) | size | quantity |
+//! |---|---|---|
+//! | 0 | 1 | torso height error `z − z_stand`, m |
+//! | 1 | 1 | torso lateral offset `y` from the track centre line, m |
+//! | 2–5 | 4 | torso orientation quaternion `x, y, z, w` (world) |
+//! | 6–8 | 3 | torso linear velocity (of the link origin), body frame, m/s |
+//! | 9–11 | 3 | torso angular velocity, body frame, rad/s |
+//! | 12–14 | 3 | torso linear acceleration, body frame, m/s² (finite difference of the world velocity over the control period, gravity not included; 0 after reset) |
+//! | 15–20 | `n_a` | actuated joint angles, rad (left hip, knee, ankle, right hip, knee, ankle) |
+//! | 21–26 | `n_a` | actuated joint velocities, rad/s |
+//! | 27–30 | `n_p` | passive joint angles, rad (left shoulder pitch, roll, right shoulder pitch, roll) |
+//! | 31–34 | `n_p` | passive joint velocities, rad/s |
+//! | 35–36 | 2 | left, right foot normal contact force / body weight |
+//! | 37–42 | `n_a` | previous action (the clamped action of the last step; 0 after reset) |
+//!
+//! [`WalkEnv::obs_layout`] gives the ranges and [`WalkEnv::obs_names`] a name per index.
+//!
+//! ## Scaling (`normalize_obs`, default on)
+//!
+//! With [`WalkConfig::normalize_obs`] on, every entry above is multiplied by a fixed factor
+//! ([`WalkEnv::obs_scale`]) so that each is of order one for the networks:
+//!
+//! | quantity | factor | raw spread it tames (std over zero- and random-torque rollouts) |
+//! |---|---|---|
+//! | height error, lateral offset | 10 (1 = 0.1 m) | 0.07–0.1 m |
+//! | orientation quaternion | 1 | 0.01–0.2 |
+//! | linear velocity | 1 (m/s) | 0.07–0.7 m/s |
+//! | angular velocity | 0.5 (1 = 2 rad/s) | 0.1–2.1 rad/s |
+//! | linear acceleration | 0.1 (1 ≈ g) | 1.5–20 m/s², peaks 160 m/s² |
+//! | actuated joint angles | 1 (rad) | 0.1–0.7 rad |
+//! | actuated joint velocities | 0.1 (1 = 10 rad/s) | 2–9 rad/s, peaks 40 rad/s |
+//! | passive joint angles | 1 (rad) | 0.01–0.3 rad |
+//! | passive joint velocities | 0.5 (1 = 2 rad/s) | 0.1–1.5 rad/s |
+//! | foot forces / weight, previous action | 1 | 0.6–1 |
+//!
+//! The spreads come from `cargo run --release -p esrl-sim --example obs_stats -- 10000 raw`
+//! (the robot falls within about 0.6 s under zero or random torques, so these are the states
+//! early training sees). The factors are constants, not running statistics, so a policy
+//! means the same thing in every run and checkpoint. Turn it off for the raw SI values above.
+//!
+//! # Action
+//!
+//! Actions are clamped to `[-1, 1]` (NaN reads as 0), one per actuated joint.
+//!
+//! - **`action = "torque"`** (default, the paper's): joint torque `τ = a·τmax`, `τmax` the
+//!   joint's URDF `<limit effort>`, commanded for the whole control period and passed through
+//!   the joint-limit model ([`PhysicsConfig::joint_limits`](crate::PhysicsConfig); crate docs,
+//!   "Physics step and joint limits").
+//! - **`action = "target"`**: a joint angle target `q*`, tracked by a position servo that
+//!   Rapier integrates inside its solver at every physics substep (a `ForceBased` motor:
+//!   `τ = clamp(kp·(q* − q) − kd·q̇, ±τmax)`, implicit, so stable at any gain), as MATLAB's
+//!   humanoid walker drives its joints through PD set-points. The map is piecewise linear
+//!   through the standing pose: `q* = q_stand + a·(hi − q_stand)` for `a ≥ 0`,
+//!   `q_stand + a·(q_stand − lo)` for `a < 0` ([`WalkEnv::target_angle`]), so a zero action
+//!   holds the standing pose and ±1 reach the limits. Gains ([`TargetGains`]): `kp` = 1500
+//!   N·m/rad, `kd` = 60 N·m·s/rad on every actuated joint, measured: the ankles need more than
+//!   the ≈ 620 N·m/rad of `m·g·h` to hold the 70 kg body upright, and with these gains a zero
+//!   action stands 20 s from every reset seed tried (torso within 3 cm, joints within 1.2°;
+//!   1000/40 drifts 7 cm, 600/30 falls); the servo reaches full effort at 5.7° (hips, knees)
+//!   and 4.6° (ankles) of error. With the torso held in the air, a step of the target to
+//!   half range is within 2° after 0.09–0.10 s (ankle), 0.13 s (knee), 0.11 s (hip,
+//!   extending) and 0.52 s (hip, flexing: lifting the leg to −46°) (`tests/target_mode.rs`).
+//!   A servo's motor impulses are constraint impulses in Rapier, which do not conserve
+//!   momentum as exactly as external torques do (crate docs, "Known limitations").
+//!
+//! # Power
+//!
+//! The power term and the gait data use the mechanical power the actuator delivers at each
+//! actuated joint: for every physics (Rapier) step, the work `τ·Δq` over the step's length
+//! `h`, where `τ` is the torque actually delivered: in `torque` mode the commanded torque
+//! after the joint-limit model (constant over the step, so the work is exact); in `target`
+//! mode the servo's torque, the mean of its law at the step's start and end states (a
+//! trapezoid rule). [`GaitSample::joint_power`](crate::GaitSample) is the mean of `τ·Δq/h`
+//! over the control period's physics steps, [`GaitSample::joint_abs_power`](crate::GaitSample)
+//! the mean of its absolute value, and [`GaitSample::joint_torque`](crate::GaitSample) the mean
+//! delivered torque. So a servo holding a load, or a torque faded away at a limit, shows in
+//! the torque; a joint at rest delivers no mechanical power whatever torque it holds (that is
+//! what `reward.torque_sq` prices).
+//!
+//! # Reward (paper eq. 12)
+//!
+//! `r = w_v·vx − w_y·y² − w_z·z² − w_P·P + c`, defaults `w_v = 1, w_y = 5, w_z = 25,
+//! w_P = 0.0005, c = 0.025`: `vx` the torso's forward (world x) velocity, `y` its lateral
+//! offset, `z` its height error, `P` the mean over actuated joints of the delivered `|τ·ω|`
+//! (Power above). Each term is reported in [`StepInfo::reward_terms`](crate::StepInfo) as
+//! `forward`, `lateral`, `height`, `power`, `alive`; they sum to the reward. The alive bonus
+//! `c` is not paid on a step that ends in a fall or off course.
+//!
+//! Options ([`RewardConfig`], all off by default, which is eq. 12):
+//!
+//! - `reward.action_sq = w`: adds the term `action_sq = −w·Σ aᵢ²` (MATLAB's walking-robot
+//!   examples use `w` = 0.02 with their torques normalised to [−1, 1]);
+//! - `reward.torque_sq = w`: adds `torque_sq = −w·Σ (τᵢ/τmaxᵢ)²`, `τᵢ` the mean delivered
+//!   torque of the period: prices holding a load (against a limit, gravity or a servo's
+//!   target) that the power term does not see;
+//! - `reward.forward_gate = { max_tilt, max_height_drop }`: `forward` is 0 on steps where the
+//!   torso tilts more than `max_tilt` from vertical or is more than `max_height_drop` below its
+//!   standing height (DeepMind Control's walker pays its move reward only in proportion to
+//!   its stand reward).
+//!
+//! # Episode
+//!
+//! Truncated after `episode_seconds / control_period` steps (60 s / 0.025 s = 2400).
+//! Terminated on a fall: torso origin more than [`FallConfig::max_height_drop`] below its
+//! standing height, torso z axis tilted more than [`FallConfig::max_tilt`] from vertical, or a
+//! non-finite state. Terminated off course ([`GaitSample::off_course`](crate::GaitSample)), when
+//! set: torso origin more than [`FallConfig::max_lateral`] from the centre line, or its heading
+//! (the angle of its x axis on the ground from world x) more than [`FallConfig::max_yaw`] from
+//! the track direction (both off by default, as in the paper). Terminated with success when
+//! the torso origin passes `x = track_length`.
+//!
+//! # Reset
+//!
+//! The robot starts from a pose ([`ResetConfig::pose`]: `standing` by default; `crouch`,
+//! `split`, or `mixed` = one of the three drawn from the seed), plus uniform noise on every
+//! movable joint's angle and velocity ([`InitNoise`], ±0.01 rad and ±0.01 rad/s by default;
+//! raise them for a wider start distribution), clamped into the joint limits, placed with its
+//! lowest point on the ground, at rest. The draws, from a ChaCha8 stream seeded with the reset
+//! seed: for each movable joint in URDF order the angle then the velocity noise, each
+//! `half-width × U(−1, 1)`; then the `mixed` pose; then the leading leg of `split`.
+//!
+//! # Code
+//!
+//! The settings are in `config` ([`WalkConfig`]), `setup` resolves them against the model
+//! and draws reset states, `observation` builds the vector above, `reward` judges each step;
+//! this file holds [`WalkEnv`] and its [`Env`] implementation, which ties them together.
+
+mod config;
+mod observation;
+mod reward;
+mod setup;
+
+use std::sync::Arc;
+
+use rapier3d::prelude::Vector;
+
+pub use config::{
+    ActionMode, FallConfig, InitNoise, ResetConfig, ResetPose, RewardConfig, TargetGains,
+    UprightGate, WalkConfig,
+};
+pub use observation::ObsLayout;
+
+use crate::env::{Env, GaitSample, Step, StepInfo};
+use crate::error::SimError;
+use crate::math::Iso;
+use crate::model::{LinkGeometry, LinkPose, RobotModel};
+use crate::sim::RobotSim;
+use setup::WalkShared;
+
+/// The walking task. See the [module docs](self) for observation, reward and episode.
+pub struct WalkEnv {
+    shared: Arc<WalkShared>,
+    sim: RobotSim,
+    prev_action: Vec<f32>,
+    prev_velocity: Vector,
+    acceleration: Vector,
+    steps: usize,
+    /// Per actuated joint, over the last control period's physics steps: mean delivered
+    /// torque, mean power τ·ω and mean |τ·ω|.
+    last_torque: Vec<f32>,
+    last_power: Vec<f32>,
+    last_abs_power: Vec<f32>,
+}
+
+impl WalkEnv {
+    /// Builds the environment described by `config` (loading its URDF).
+    pub fn new(config: WalkConfig) -> Result<Self, SimError> {
+        config.validate()?;
+        let model = config.load_model()?;
+        Self::from_model(model, config)
+    }
+
+    /// Builds the environment on an already parsed model (`config.urdf` is ignored).
+    pub fn from_model(model: Arc<RobotModel>, config: WalkConfig) -> Result<Self, SimError> {
+        let shared = WalkShared::new(model, config)?;
+        // The checked constructor, once: every later world is built from the same setup.
+        let sim = RobotSim::new(
+            shared.model.clone(),
+            &shared.setup,
+            &shared.standing_state(),
+        )?;
+        Ok(Self::with_sim(Arc::new(shared), sim))
+    }
+
+    /// Another environment on the same parsed model and config, standing still (cheap: no
+    /// URDF parsing). Call [`Env::reset`] before use.
+    pub fn spawn(&self) -> Self {
+        let s = &self.shared;
+        let sim = RobotSim::build(s.model.clone(), &s.setup, &s.standing_state());
+        Self::with_sim(self.shared.clone(), sim)
+    }
+
+    fn with_sim(shared: Arc<WalkShared>, sim: RobotSim) -> Self {
+        let n_a = shared.actuated.len();
+        Self {
+            shared,
+            sim,
+            prev_action: vec![0.0; n_a],
+            prev_velocity: Vector::ZERO,
+            acceleration: Vector::ZERO,
+            steps: 0,
+            last_torque: vec![0.0; n_a],
+            last_power: vec![0.0; n_a],
+            last_abs_power: vec![0.0; n_a],
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &WalkConfig {
+        &self.shared.config
+    }
+
+    /// The robot model.
+    pub fn model(&self) -> &Arc<RobotModel> {
+        &self.shared.model
+    }
+
+    /// The physics world (for inspection and tests).
+    pub fn sim(&self) -> &RobotSim {
+        &self.sim
+    }
+
+    /// The physics world, mutable (e.g. to add joint servos in tests). Changes last until the
+    /// next [`Env::reset`], which rebuilds the world.
+    pub fn sim_mut(&mut self) -> &mut RobotSim {
+        &mut self.sim
+    }
+
+    /// Actuated joint names, in action order.
+    pub fn actuated_joint_names(&self) -> &[String] {
+        &self.shared.config.actuated_joints
+    }
+
+    /// Passive joint names, in observation order.
+    pub fn passive_joint_names(&self) -> Vec<&str> {
+        self.shared
+            .passive
+            .iter()
+            .map(|&j| self.shared.model.joints()[j].name.as_str())
+            .collect()
+    }
+
+    /// Effort limits of the actuated joints (torque at action ±1), N·m.
+    pub fn effort_limits(&self) -> &[f32] {
+        &self.shared.effort
+    }
+
+    /// Standing-pose angles of the actuated joints, rad.
+    pub fn standing_pose(&self) -> Vec<f32> {
+        self.shared
+            .actuated
+            .iter()
+            .map(|&j| self.shared.standing_q[j] as f32)
+            .collect()
+    }
+
+    /// Whole-body centre of mass in the standing pose, relative to the torso origin, m
+    /// (from the model, not the simulation).
+    pub fn standing_com(&self) -> [f32; 3] {
+        let s = &self.shared;
+        s.model
+            .center_of_mass(&Iso::IDENTITY, &s.standing_q)
+            .map(|v| v as f32)
+    }
+
+    /// Torso origin height in the standing pose with the feet on the ground, m.
+    pub fn standing_height(&self) -> f32 {
+        self.shared.standing_height as f32
+    }
+
+    /// Total mass × gravity, N.
+    pub fn body_weight(&self) -> f32 {
+        self.shared.weight
+    }
+
+    /// Index ranges of the observation.
+    pub fn obs_layout(&self) -> &ObsLayout {
+        &self.shared.layout
+    }
+
+    /// The factor every observation index is multiplied by: the module docs' table when
+    /// [`WalkConfig::normalize_obs`] is on, all 1 otherwise. Divide an observation by it for
+    /// the SI values.
+    pub fn obs_scale(&self) -> &[f32] {
+        &self.shared.obs_scale
+    }
+
+    /// A name for every observation index, e.g. `joint_angle/left_knee`.
+    pub fn obs_names(&self) -> Vec<String> {
+        observation::names(&self.shared)
+    }
+
+    /// World poses of every link frame (URDF link order).
+    pub fn link_poses(&self) -> Vec<LinkPose> {
+        self.sim.link_poses()
+    }
+
+    /// Collision geometry of every link, in its link frame (URDF link order).
+    pub fn geometry(&self) -> Vec<LinkGeometry> {
+        self.shared.model.geometry()
+    }
+
+    /// Steps taken since the last reset.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+
+    /// The joint angle target of actuated joint `k` for action `a` in `target` mode (module
+    /// docs, "Action"): the standing angle at 0, the joint's limits at ±1, linear in between
+    /// on each side.
+    pub fn target_angle(&self, k: usize, a: f32) -> f32 {
+        let s = &self.shared;
+        let stand = s.standing_q[s.actuated[k]] as f32;
+        let [lo, hi] = s.range[k];
+        let a = if a.is_finite() {
+            a.clamp(-1.0, 1.0)
+        } else {
+            0.0
+        };
+        if a >= 0.0 {
+            stand + a * (hi - stand)
+        } else {
+            stand + a * (stand - lo)
+        }
+    }
+
+    /// Clamps `action` (NaN reads as 0) and hands it to the joints: torques, or servo targets
+    /// (module docs, "Action").
+    fn apply_action(&mut self, action: &[f32]) {
+        let s = self.shared.clone();
+        for (k, &j) in s.actuated.iter().enumerate() {
+            let a = action.get(k).copied().unwrap_or(0.0);
+            let a = if a.is_finite() {
+                a.clamp(-1.0, 1.0)
+            } else {
+                0.0
+            };
+            self.prev_action[k] = a;
+            match s.config.action {
+                ActionMode::Torque => self.sim.set_joint_torque(j, a * s.effort[k]),
+                ActionMode::Target => {
+                    let t = &s.config.target;
+                    let target = self.target_angle(k, a);
+                    self.sim
+                        .set_joint_motor(j, target, t.stiffness, t.damping, s.effort[k]);
+                }
+            }
+        }
+    }
+
+    /// Runs the control period's Rapier steps, averaging each actuated joint's delivered
+    /// torque, power and |power| over them (module docs, "Power").
+    fn advance_physics(&mut self) {
+        let s = self.shared.clone();
+        let substeps = s.config.physics.substeps as usize;
+        let share = 1.0 / substeps as f32;
+        let h = self.sim.dt();
+        self.last_torque.fill(0.0);
+        self.last_power.fill(0.0);
+        self.last_abs_power.fill(0.0);
+        let mut start = vec![(0.0f32, 0.0f32); s.actuated.len()];
+        for _ in 0..substeps {
+            for (k, st) in start.iter_mut().enumerate() {
+                let j = s.actuated[k];
+                *st = (self.sim.joint_position(j), self.sim.servo_torque(j));
+            }
+            self.sim.step();
+            for (k, &(q0, servo0)) in start.iter().enumerate() {
+                let j = s.actuated[k];
+                // The work of the physics step over its length. The applied torque is
+                // constant over the step; a servo's is taken as the mean of its law at the
+                // step's start and end.
+                let tau = self.sim.applied_torque(j) + 0.5 * (servo0 + self.sim.servo_torque(j));
+                let p = tau * (self.sim.joint_position(j) - q0) / h;
+                self.last_torque[k] += tau * share;
+                self.last_power[k] += p * share;
+                self.last_abs_power[k] += p.abs() * share;
+            }
+        }
+    }
+
+    fn observation(&self) -> Vec<f32> {
+        observation::observe(
+            &self.shared,
+            &self.sim,
+            &self.prev_action,
+            self.acceleration,
+        )
+    }
+}
+
+impl Env for WalkEnv {
+    fn obs_dim(&self) -> usize {
+        self.shared.layout.len
+    }
+
+    fn act_dim(&self) -> usize {
+        self.shared.actuated.len()
+    }
+
+    fn reset(&mut self, seed: u64) -> Vec<f32> {
+        let s = self.shared.clone();
+        self.sim = RobotSim::build(s.model.clone(), &s.setup, &s.initial_state(seed));
+        self.prev_action.fill(0.0);
+        self.prev_velocity = self.sim.link_origin_velocity(s.torso);
+        self.acceleration = Vector::ZERO;
+        self.steps = 0;
+        self.last_torque.fill(0.0);
+        self.last_power.fill(0.0);
+        self.last_abs_power.fill(0.0);
+        self.observation()
+    }
+
+    fn step(&mut self, action: &[f32]) -> Step {
+        let s = self.shared.clone();
+        self.apply_action(action);
+        self.advance_physics();
+        self.steps += 1;
+        let v_world = self.sim.link_origin_velocity(s.torso);
+        self.acceleration = (v_world - self.prev_velocity) / s.config.control_period;
+        self.prev_velocity = v_world;
+
+        let obs = self.observation();
+        let pose = self.sim.link_pose(s.torso);
+        let torso = reward::Torso {
+            pose,
+            vx: v_world.x,
+            z: pose.translation.z - s.standing_height as f32,
+        };
+        let effort = reward::Effort {
+            action: &self.prev_action,
+            torque: &self.last_torque,
+            abs_power: &self.last_abs_power,
+            limit: &s.effort,
+        };
+        let finite = obs.iter().all(|v| v.is_finite());
+        let outcome = reward::judge(&s.config, &torso, finite, &effort);
+        let terminated = outcome.fell || outcome.off_course || outcome.success;
+        let truncated = !terminated && self.steps >= s.max_steps;
+        let gait = GaitSample {
+            time: self.steps as f32 * s.config.control_period,
+            torso_position: pose.translation.to_array(),
+            torso_rotation: pose.rotation.to_array(),
+            forward_velocity: torso.vx,
+            lateral_offset: pose.translation.y,
+            height_error: torso.z,
+            joint_angle: s
+                .actuated
+                .iter()
+                .map(|&j| self.sim.joint_position(j))
+                .collect(),
+            joint_velocity: s
+                .actuated
+                .iter()
+                .map(|&j| self.sim.joint_velocity(j))
+                .collect(),
+            joint_torque: self.last_torque.clone(),
+            joint_power: self.last_power.clone(),
+            joint_abs_power: self.last_abs_power.clone(),
+            foot_force: s.feet.map(|f| self.sim.ground_normal_force(f)),
+            fell: outcome.fell,
+            off_course: outcome.off_course,
+            success: outcome.success,
+        };
+        Step {
+            obs,
+            reward: outcome.reward,
+            terminated,
+            truncated,
+            info: StepInfo {
+                reward_terms: outcome.terms,
+                gait: Some(gait),
+            },
+        }
+    }
+
+    fn control_period(&self) -> f32 {
+        self.shared.config.control_period
+    }
+
+    fn max_episode_steps(&self) -> usize {
+        self.shared.max_steps
+    }
+}

@@ -1,0 +1,109 @@
+//! What a step earns and whether it ends the episode: the terms of paper eq. 12 and their
+//! options, the fall, off-course and success rules (module docs of [`walk`](super),
+//! "Reward" and "Episode").
+
+use rapier3d::prelude::{Pose, Rotation, Vector};
+
+use super::config::WalkConfig;
+
+/// The torso after a step, as the reward and the episode rules see it.
+pub(super) struct Torso {
+    /// World pose of the torso link frame.
+    pub(super) pose: Pose,
+    /// Forward (world x) velocity of its origin, m/s.
+    pub(super) vx: f32,
+    /// Height error `z − z_stand`, m.
+    pub(super) z: f32,
+}
+
+/// The actuators over the step: the clamped action, and per actuated joint the mean
+/// delivered torque, the mean `|τ·ω|` and the effort limit.
+pub(super) struct Effort<'a> {
+    pub(super) action: &'a [f32],
+    pub(super) torque: &'a [f32],
+    pub(super) abs_power: &'a [f32],
+    pub(super) limit: &'a [f32],
+}
+
+/// The verdict on one step.
+pub(super) struct Outcome {
+    /// Named terms, summing to `reward`.
+    pub(super) terms: Vec<(&'static str, f32)>,
+    /// The step's reward (0 when the state or the reward is not finite).
+    pub(super) reward: f32,
+    /// The torso fell (or the state stopped being finite).
+    pub(super) fell: bool,
+    /// The torso left the lateral band or turned past the yaw limit.
+    pub(super) off_course: bool,
+    /// The torso passed the end of the track.
+    pub(super) success: bool,
+}
+
+/// Judges a step: `finite` says whether the observation is finite.
+pub(super) fn judge(config: &WalkConfig, torso: &Torso, finite: bool, e: &Effort) -> Outcome {
+    let (pose, vx, z) = (torso.pose, torso.vx, torso.z);
+    let y = pose.translation.y;
+    let tilt = torso_tilt(pose.rotation);
+    let fall = &config.fall;
+    let fell = !finite || z < -fall.max_height_drop || tilt > fall.max_tilt;
+    let off_course = !fell
+        && (fall.max_lateral.is_some_and(|m| y.abs() > m)
+            || fall
+                .max_yaw
+                .is_some_and(|m| torso_yaw(pose.rotation).abs() > m));
+    let w = &config.reward;
+    let upright = w
+        .forward_gate
+        .as_ref()
+        .is_none_or(|g| tilt <= g.max_tilt && z >= -g.max_height_drop);
+    let p_mean = e.abs_power.iter().sum::<f32>() / e.abs_power.len() as f32;
+    let mut terms = vec![
+        ("forward", if upright { w.forward * vx } else { 0.0 }),
+        ("lateral", -w.lateral * y * y),
+        ("height", -w.height * z * z),
+        ("power", -w.power * p_mean),
+        ("alive", if fell || off_course { 0.0 } else { w.alive }),
+    ];
+    if w.action_sq != 0.0 {
+        let a2: f32 = e.action.iter().map(|a| a * a).sum();
+        terms.push(("action_sq", -w.action_sq * a2));
+    }
+    if w.torque_sq != 0.0 {
+        let t2: f32 = e
+            .torque
+            .iter()
+            .zip(e.limit)
+            .map(|(t, l)| (t / l).powi(2))
+            .sum();
+        terms.push(("torque_sq", -w.torque_sq * t2));
+    }
+    let mut reward: f32 = terms.iter().map(|t| t.1).sum();
+    let fell = fell || !reward.is_finite();
+    if !finite || !reward.is_finite() {
+        reward = 0.0;
+    }
+    let success = !fell && !off_course && pose.translation.x >= config.track_length;
+    Outcome {
+        terms,
+        reward,
+        fell,
+        off_course,
+        success,
+    }
+}
+
+/// Angle between the torso's z axis and the world's, rad.
+fn torso_tilt(rotation: Rotation) -> f32 {
+    (rotation * Vector::Z).z.clamp(-1.0, 1.0).acos()
+}
+
+/// Heading of the torso: the angle of its x axis projected on the ground from world x, rad
+/// (positive to the left); 0 when the x axis points straight up or down.
+fn torso_yaw(rotation: Rotation) -> f32 {
+    let x = rotation * Vector::X;
+    if x.x == 0.0 && x.y == 0.0 {
+        0.0
+    } else {
+        x.y.atan2(x.x)
+    }
+}
