@@ -68,6 +68,19 @@ pub fn final_mean(curve: &[f64], window: usize) -> Result<f64> {
     Ok(mean_of(&curve[start..]))
 }
 
+/// Mean Q₀ of a run (SPEC §6): the mean of the finite values of its `q0` column, `None` when
+/// there are none. A diverged critic's NaN or ±inf is left out rather than averaged in; the
+/// one rule for `summary.json`, `esrl compare` and the Python report.
+///
+/// ```
+/// assert_eq!(esrl_metrics::q0_mean(&[1.0, f64::NAN, 3.0]), Some(2.0));
+/// assert_eq!(esrl_metrics::q0_mean(&[f64::INFINITY]), None);
+/// ```
+pub fn q0_mean(q0: &[f64]) -> Option<f64> {
+    let finite: Vec<f64> = q0.iter().copied().filter(|q| q.is_finite()).collect();
+    (!finite.is_empty()).then(|| mean_of(&finite))
+}
+
 /// Final-50: [`final_mean`] with the paper's window of 50.
 pub fn final_50(curve: &[f64]) -> Result<f64> {
     final_mean(curve, WINDOW)

@@ -51,8 +51,8 @@ mod table;
 
 pub use curve::{
     auc, best_win_50, best_window_mean, episodes_to_target, episodes_to_target_window, final_50,
-    final_mean, median, method_target, method_target_with, nauc, summarize_method, trailing_means,
-    CurveSummary, TARGET_FRACTION, WINDOW,
+    final_mean, median, method_target, method_target_with, nauc, q0_mean, summarize_method,
+    trailing_means, CurveSummary, TARGET_FRACTION, WINDOW,
 };
 pub use cycle::{
     classify_gait, gait_phases, majority_class, mean_cycle, step_lengths, GaitClass,

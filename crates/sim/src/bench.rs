@@ -76,7 +76,6 @@ pub fn bench_walk(config: &WalkConfig, steps: usize, seed: u64) -> Result<BenchR
         episodes += 1;
     }
     let wall_s = start.elapsed().as_secs_f64();
-    drop(random);
     let steps_per_s = if wall_s > 0.0 {
         steps as f64 / wall_s
     } else {

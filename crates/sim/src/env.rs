@@ -19,6 +19,10 @@ pub trait Env: Send {
     fn max_episode_steps(&self) -> usize;
 }
 
+/// Makes a fresh environment at every call, from any thread: how parallel rollouts and
+/// learners get theirs (an `Arc<MakeEnv>` is cheap to share).
+pub type MakeEnv = dyn Fn() -> Box<dyn Env> + Send + Sync;
+
 /// The outcome of one [`Env::step`].
 #[derive(Clone, Debug, Serialize)]
 pub struct Step {

@@ -229,7 +229,7 @@ pub mod pendulum;
 mod sim;
 pub mod walk;
 
-pub use env::{Env, GaitSample, Step, StepInfo};
+pub use env::{Env, GaitSample, MakeEnv, Step, StepInfo};
 pub use episode::{hooks, run_episode, EpisodeEnd, EpisodeHook, Hooks};
 pub use error::{SimError, UrdfError};
 pub use model::{
