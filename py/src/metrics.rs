@@ -55,6 +55,12 @@ pub fn nauc(curve: Curve<'_>) -> PyResult<f64> {
     m::nauc(&to_vec(&curve)).map_err(metrics_error)
 }
 
+/// Mean Q₀ of a run: the mean of the finite values, `None` when there are none.
+#[pyfunction]
+pub fn q0_mean(q0: Curve<'_>) -> Option<f64> {
+    m::q0_mean(&to_vec(&q0))
+}
+
 /// Final-50: mean of the last 50 values (all values if fewer).
 #[pyfunction]
 pub fn final_50(curve: Curve<'_>) -> PyResult<f64> {
@@ -331,6 +337,7 @@ pub fn register(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("TARGET_FRACTION", m::TARGET_FRACTION)?;
     module.add_function(wrap_pyfunction!(auc, module)?)?;
     module.add_function(wrap_pyfunction!(nauc, module)?)?;
+    module.add_function(wrap_pyfunction!(q0_mean, module)?)?;
     module.add_function(wrap_pyfunction!(final_50, module)?)?;
     module.add_function(wrap_pyfunction!(final_mean, module)?)?;
     module.add_function(wrap_pyfunction!(best_win_50, module)?)?;

@@ -1,13 +1,12 @@
-//! A trained policy loaded from a run folder's checkpoint, through the `esrl` CLI library
-//! (`esrl::eval`): acting step by step from Python, and deterministic evaluations that are
+//! A trained policy loaded from a run folder's checkpoint through `esrl_eval`, the library
+//! `esrl eval` runs: acting step by step from Python, and deterministic evaluations that are
 //! `esrl eval` itself (same loader, same episode loop, same `eval.json` structure).
 
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-use esrl::args::EnvKind;
-use esrl::eval::LoadedRun;
 use esrl_agents::{ActMode, Policy};
+use esrl_eval::{EvalReport, LoadedRun};
 use numpy::{AllowTypeChange, PyArray1, PyArrayLike1};
 use pyo3::exceptions::{PyFileNotFoundError, PyPermissionError};
 use pyo3::prelude::*;
@@ -17,15 +16,25 @@ use rand_chacha::ChaCha8Rng;
 use crate::errors::{esrl_error, not_found, panic_message, value_error};
 use crate::metrics::to_py;
 
-/// An `anyhow` error from the CLI library: I/O kinds are kept, the rest is a `ValueError`
-/// (bad config, a checkpoint that does not match it), with the whole context chain.
-fn cli_error(error: anyhow::Error) -> PyErr {
-    let message = format!("{error:#}");
-    match error
-        .chain()
-        .find_map(|e| e.downcast_ref::<std::io::Error>())
-        .map(std::io::Error::kind)
-    {
+/// An error of the run library: I/O kinds are kept, the rest is a `ValueError` (bad config,
+/// a checkpoint that does not match it), with the whole context chain.
+fn run_error(error: esrl_run::Error) -> PyErr {
+    let message = error.chain();
+    let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(&error);
+    let mut io_kind = None;
+    while let Some(e) = cause {
+        // A transparent `Error::Io` hands on its I/O error's source, not the error itself.
+        let io = match e.downcast_ref::<esrl_run::Error>() {
+            Some(esrl_run::Error::Io(io)) => Some(io),
+            _ => e.downcast_ref::<std::io::Error>(),
+        };
+        if let Some(io) = io {
+            io_kind = Some(io.kind());
+            break;
+        }
+        cause = e.source();
+    }
+    match io_kind {
         Some(std::io::ErrorKind::NotFound) => PyFileNotFoundError::new_err(message),
         Some(std::io::ErrorKind::PermissionDenied) => PyPermissionError::new_err(message),
         _ => value_error(message),
@@ -33,7 +42,7 @@ fn cli_error(error: anyhow::Error) -> PyErr {
 }
 
 /// `FileNotFoundError` for what is missing (the folder, or its checkpoint); the rest of the
-/// checks are the CLI's (`esrl::eval::locate`).
+/// checks are the evaluation library's (`esrl_eval::locate`).
 fn check_exists(path: &Path) -> PyResult<()> {
     if !path.exists() {
         return Err(not_found(format!(
@@ -44,7 +53,7 @@ fn check_exists(path: &Path) -> PyResult<()> {
     // A run folder (a checkpoint folder also keeps a copy of config.toml, beside its weights).
     let run_folder =
         path.join("config.toml").is_file() && !path.join("agent.safetensors").is_file();
-    if run_folder && esrl::checkpoint::find(path).is_none() {
+    if run_folder && esrl_run::checkpoint::find(path).is_none() {
         return Err(not_found(format!(
             "{} has no complete checkpoint (checkpoint/ with state.json and agent.safetensors): \
              the run did not reach its first checkpoint",
@@ -89,18 +98,18 @@ impl PolicyCore {
         Ok(())
     }
 
-    /// `esrl::eval::evaluate` without the GIL, with panics caught.
+    /// `esrl_eval::evaluate` without the GIL, with panics caught.
     fn run_evaluation(
         &self,
         py: Python<'_>,
         seed: u64,
         episodes: usize,
         record: Option<&Path>,
-    ) -> PyResult<esrl::eval::EvalReport> {
+    ) -> PyResult<EvalReport> {
         let loaded = &self.loaded;
         py.detach(|| {
             std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                esrl::eval::evaluate(loaded, seed, episodes, record)
+                esrl_eval::evaluate(loaded, seed, episodes, record)
             }))
         })
         .map_err(|p| {
@@ -109,7 +118,7 @@ impl PolicyCore {
                 panic_message(p.as_ref())
             ))
         })?
-        .map_err(cli_error)
+        .map_err(run_error)
     }
 }
 
@@ -120,8 +129,8 @@ impl PolicyCore {
     fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         check_exists(&path)?;
         let loaded = py
-            .detach(|| esrl::eval::load_run(&path))
-            .map_err(cli_error)?;
+            .detach(|| esrl_eval::load_run(&path))
+            .map_err(run_error)?;
         let (obs_dim, act_dim) = (loaded.agent.obs_dim(), loaded.agent.act_dim());
         let stepper = Stepper {
             policy: loaded.agent.policy(),
@@ -144,10 +153,7 @@ impl PolicyCore {
     /// The environment (`walk` or `pendulum`).
     #[getter]
     fn env(&self) -> &'static str {
-        match self.loaded.config.env {
-            EnvKind::Walk => "walk",
-            EnvKind::Pendulum => "pendulum",
-        }
+        self.loaded.config.env.name()
     }
 
     /// The run folder.

@@ -15,7 +15,8 @@ pub enum Algo {
     Sac,
     /// TD3: deterministic actor, twin critics, target policy smoothing, delayed actor updates.
     Td3,
-    /// DDPG: deterministic actor, one critic, no smoothing, actor updated every step.
+    /// DDPG: TD3 with one critic and, by default ([`RlConfig::for_algo`]), neither target
+    /// smoothing nor delay.
     Ddpg,
 }
 
@@ -79,14 +80,17 @@ pub struct RlConfig {
     pub target_entropy: Option<f64>,
     /// Whether α is learned (eq. 6). Default true.
     pub learn_alpha: bool,
-    /// Std of the Gaussian exploration noise on actions in [−1, 1] (TD3/DDPG). Default 0.1
-    /// (TD3 paper).
+    /// Std of the Gaussian exploration noise on actions in [−1, 1] (TD3/DDPG; SAC explores
+    /// by sampling its policy). Default 0.1 (TD3 paper).
     pub exploration_noise: f64,
-    /// Std of target policy smoothing noise (TD3). Default 0.2 (TD3 paper).
+    /// Std of the target policy smoothing noise (TD3/DDPG; SAC samples its target action);
+    /// 0 turns smoothing off. Default 0.2 (TD3 paper); DDPG's default is 0
+    /// ([`RlConfig::for_algo`]).
     pub target_noise: f64,
-    /// Clip of the target smoothing noise (TD3). Default 0.5 (TD3 paper).
+    /// Clip of the target smoothing noise (TD3/DDPG). Default 0.5 (TD3 paper).
     pub target_noise_clip: f64,
-    /// Critic updates per actor update (TD3). Default 2 (TD3 paper).
+    /// Critic updates per actor and target update (TD3/DDPG; SAC updates its actor at every
+    /// update). Default 2 (TD3 paper); DDPG's default is 1 ([`RlConfig::for_algo`]).
     pub policy_delay: usize,
     /// When plain agents learn. Default every step (SAC/TD3 papers).
     pub learn_every: LearnEvery,
@@ -118,6 +122,23 @@ impl Default for RlConfig {
             policy_delay: 2,
             learn_every: LearnEvery::Steps(1),
             updates_per_learn: 1,
+        }
+    }
+}
+
+impl RlConfig {
+    /// The defaults for `algo`. DDPG is TD3 with its tricks off, as in Stable-Baselines3's
+    /// `ddpg.py`: one critic (fixed by the algorithm), `policy_delay` 1 and `target_noise` 0;
+    /// a DDPG config that sets them runs DDPG with TD3's delay or smoothing. SAC and TD3
+    /// take [`RlConfig::default`].
+    pub fn for_algo(algo: Algo) -> Self {
+        match algo {
+            Algo::Sac | Algo::Td3 => Self::default(),
+            Algo::Ddpg => Self {
+                policy_delay: 1,
+                target_noise: 0.0,
+                ..Self::default()
+            },
         }
     }
 }

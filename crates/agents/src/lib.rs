@@ -1,18 +1,26 @@
-//! SAC, TD3 and DDPG with recurrent sequence replay.
+//! SAC, TD3 and DDPG with recurrent sequence replay, and the learner interface training
+//! loops drive.
 //!
-//! One [`Agent`] type covers the three algorithms (DDPG is TD3 with one critic, no target
-//! smoothing and no delay); an [`Algo`] picks which. Networks come from `esrl-nn` (the paper's
-//! LSTM actor and critics, or MLPs); experience lives in an episode-aware [`ReplayBuffer`] that
-//! samples windows of consecutive steps for recurrent training (burn-in, then trained steps,
-//! never crossing an episode) or single transitions for feed-forward networks. [`Trainer`] runs
-//! plain training episode by episode; the hybrid ES loop (`esrl-es`) drives the same agent.
+//! One [`Agent`] type covers the three algorithms; what differs between them (critics,
+//! entropy term, target smoothing, the actor's delay) is resolved once when it is built, and
+//! one update ([`Agent::update`], in `update.rs`, each loss headed by its equation) serves
+//! them all: DDPG is TD3 with one critic and its tricks off ([`RlConfig::for_algo`]).
+//! Networks come from `esrl-nn` (the paper's LSTM actor and critics, or MLPs); experience
+//! lives in an episode-aware [`ReplayBuffer`] that samples windows of consecutive steps for
+//! recurrent training (burn-in, then trained steps, never crossing an episode) or single
+//! transitions for feed-forward networks.
+//!
+//! A [`Learner`] runs one row at a time, reports it and saves and restores its full state;
+//! [`Trainer`] is the plain one (an episode per row), the hybrid ES loop (`esrl-es`) the
+//! other. Episodes run through `esrl_sim::run_episode`; every random stream is named in
+//! `esrl-streams`.
 //!
 //! ```
 //! use esrl_agents::{Agent, Algo, NetConfig, RlConfig, Trainer};
 //! use esrl_sim::{Env, Pendulum};
 //!
 //! let mut env = Pendulum::new();
-//! let cfg = RlConfig { batch_size: 16, warm_start: 100, ..RlConfig::default() };
+//! let cfg = RlConfig { batch_size: 16, warm_start: 100, ..RlConfig::for_algo(Algo::Sac) };
 //! let agent = Agent::new(Algo::Sac, env.obs_dim(), env.act_dim(), &NetConfig::tiny(false), &cfg, 0)?;
 //! let mut trainer = Trainer::new(agent, 0);
 //! let report = trainer.episode(&mut env)?;
@@ -25,15 +33,21 @@
 //! rebuilds it from the preceding steps of the same episode).
 
 pub mod agent;
+pub mod bench;
 pub mod config;
+pub mod learner;
 pub mod nets;
+pub mod policy;
 pub mod replay;
 pub mod rollout;
 pub mod train;
+pub mod update;
 
-pub use agent::{ActMode, Agent, AgentError, Policy, UpdateStats};
+pub use agent::{Agent, AgentError, UpdateStats};
 pub use config::{Algo, ConfigError, LearnEvery, RlConfig};
+pub use learner::{Learner, LearnerState, Row, TrainerState};
 pub use nets::NetConfig;
+pub use policy::{ActMode, Exploration, Policy};
 pub use replay::{ReplayBuffer, SequenceBatch, Transition};
 pub use rollout::{rollout, Episode};
-pub use train::{EpisodeReport, Trainer};
+pub use train::{EpisodeReport, LossMeans, Trainer};

@@ -1,9 +1,10 @@
-//! Running a policy through one episode, keeping its transitions.
+//! Running a policy (or random actions) through one episode and keeping its transitions.
 
-use crate::agent::{ActMode, Policy};
+use crate::policy::{ActMode, Policy};
 use crate::replay::{ReplayBuffer, Transition};
-use esrl_sim::{Env, Step};
+use esrl_sim::{run_episode, Env, EpisodeHook, Step};
 use rand::Rng;
+use std::convert::Infallible;
 
 /// One finished episode: its transitions in order, its return and how it ended.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -39,6 +40,11 @@ impl Episode {
         self.reward.is_empty()
     }
 
+    /// The first observation (the state the episode started from).
+    pub fn first_obs(&self) -> &[f32] {
+        &self.obs[..self.obs_dim.min(self.obs.len())]
+    }
+
     /// Appends every transition to `buffer` as one episode.
     pub fn push_into(&self, buffer: &mut ReplayBuffer) {
         let (o, a) = (self.obs_dim, self.act_dim);
@@ -64,48 +70,61 @@ pub enum Actor<'p> {
     Policy(&'p mut Policy, ActMode),
 }
 
+/// The hook of [`rollout`]: acts as `actor` says and keeps every transition.
+struct Keep<'a, 'p, R: ?Sized> {
+    actor: Actor<'p>,
+    rng: &'a mut R,
+    episode: Episode,
+}
+
+impl<E: ?Sized, R: Rng + ?Sized> EpisodeHook<E> for Keep<'_, '_, R> {
+    type Error = Infallible;
+
+    fn act(&mut self, obs: &[f32], action: &mut [f32]) {
+        match &mut self.actor {
+            Actor::Random => action
+                .iter_mut()
+                .for_each(|x| *x = self.rng.random_range(-1.0..=1.0)),
+            Actor::Policy(p, mode) => p.act(obs, *mode, self.rng, action),
+        }
+    }
+
+    fn step(&mut self, _: &E, obs: &[f32], action: &[f32], step: &Step) -> Result<(), Infallible> {
+        let ep = &mut self.episode;
+        ep.obs.extend_from_slice(obs);
+        ep.action.extend_from_slice(action);
+        ep.reward.push(step.reward);
+        ep.next_obs.extend_from_slice(&step.obs);
+        ep.terminated.push(step.terminated);
+        Ok(())
+    }
+}
+
 /// Runs one episode from `env.reset(env_seed)` until it terminates or is truncated (or after
-/// `max_steps`, counted as truncation), calling `on_step` after every step.
+/// `max_steps`, counted as truncation), drawing actions' randomness from `rng`, and returns
+/// its transitions.
 pub fn rollout<R: Rng + ?Sized>(
     env: &mut dyn Env,
     mut actor: Actor<'_>,
     env_seed: u64,
     max_steps: Option<usize>,
     rng: &mut R,
-    mut on_step: impl FnMut(&Step),
 ) -> Episode {
-    let (o, a) = (env.obs_dim(), env.act_dim());
-    let mut ep = Episode {
-        obs_dim: o,
-        act_dim: a,
-        ..Episode::default()
-    };
-    let mut obs = env.reset(env_seed);
     if let Actor::Policy(p, _) = &mut actor {
         p.reset();
     }
-    let limit = max_steps.unwrap_or(usize::MAX);
-    let mut action = vec![0.0f32; a];
-    loop {
-        match &mut actor {
-            Actor::Random => action
-                .iter_mut()
-                .for_each(|x| *x = rng.random_range(-1.0..=1.0)),
-            Actor::Policy(p, mode) => p.act(&obs, *mode, rng, &mut action),
-        }
-        let step = env.step(&action);
-        on_step(&step);
-        ep.obs.extend_from_slice(&obs);
-        ep.action.extend_from_slice(&action);
-        ep.reward.push(step.reward);
-        ep.next_obs.extend_from_slice(&step.obs);
-        ep.terminated.push(step.terminated);
-        ep.ret += f64::from(step.reward);
-        let hit_limit = ep.len() >= limit;
-        if step.terminated || step.truncated || hit_limit {
-            ep.truncated = !step.terminated;
-            return ep;
-        }
-        obs = step.obs;
-    }
+    let mut keep = Keep {
+        episode: Episode {
+            obs_dim: env.obs_dim(),
+            act_dim: env.act_dim(),
+            ..Episode::default()
+        },
+        actor,
+        rng,
+    };
+    let Ok(end) = run_episode(env, env_seed, max_steps, &mut keep);
+    let mut episode = keep.episode;
+    episode.ret = end.ret;
+    episode.truncated = end.truncated;
+    episode
 }

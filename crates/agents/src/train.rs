@@ -1,13 +1,19 @@
-//! Plain (non-ES) training: one episode at a time, learning as [`RlConfig::learn_every`] says.
+//! The RL side of every learner ([`Trainer`]: an agent, its replay buffer, its random
+//! stream), and plain (non-ES) training: one episode per row, learning as
+//! [`RlConfig::learn_every`] says.
 
-use crate::agent::{ActMode, Agent, AgentError, UpdateStats};
+use crate::agent::{Agent, AgentError, UpdateStats};
 use crate::config::{LearnEvery, RlConfig};
+use crate::learner::{state_error, Learner, Row, TrainerState};
+use crate::policy::{ActMode, Policy};
 use crate::replay::{ReplayBuffer, SequenceBatch, Transition};
-use esrl_sim::Env;
+use crate::rollout::{rollout, Actor, Episode};
+use esrl_sim::{run_episode, Env, EpisodeHook, MakeEnv, Step};
 use esrl_streams::Stream;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
 
 /// One training episode's row of `metrics.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -16,7 +22,10 @@ pub struct EpisodeReport {
     pub episode: usize,
     /// Environment steps taken so far, this episode included.
     pub env_steps: u64,
-    /// The training episode's return (the learning curve of plain agents).
+    /// The learning-curve value: the training episode's return.
+    pub curve: f64,
+    /// The training episode's return.
+    #[serde(rename = "return")]
     pub ret: f64,
     /// Steps in the episode.
     pub length: usize,
@@ -32,6 +41,27 @@ pub struct EpisodeReport {
     pub alpha: Option<f64>,
     /// Gradient updates so far.
     pub updates: u64,
+}
+
+impl Row for EpisodeReport {
+    fn curve(&self) -> f64 {
+        self.curve
+    }
+
+    fn q0(&self) -> f64 {
+        self.q0
+    }
+
+    fn env_steps(&self) -> u64 {
+        self.env_steps
+    }
+
+    fn summary(&self) -> String {
+        format!(
+            "episode {}: return {:.1}, {} steps",
+            self.episode, self.ret, self.length
+        )
+    }
 }
 
 /// Running means of update statistics.
@@ -80,25 +110,24 @@ pub fn sample_batch(
     }
 }
 
-/// An agent, its replay buffer and its random stream, trained episode by episode.
+/// An agent, its replay buffer and its random stream ([`Stream::Trainer`]): the RL side of
+/// both learners. Trained alone it runs episodes ([`Trainer::episode`]); the hybrid loop
+/// stores its population's episodes here and runs the inner cycles ([`Trainer::train`]).
 #[derive(Debug, Clone)]
 pub struct Trainer {
-    /// The agent.
-    pub agent: Agent,
-    /// Its replay buffer.
-    pub buffer: ReplayBuffer,
-    /// Random stream for warm-start actions, exploration and batch sampling.
-    pub rng: ChaCha8Rng,
-    /// Seed of the run (episode seeds derive from it).
-    pub seed: u64,
-    /// Environment steps taken.
-    pub env_steps: u64,
-    /// Episodes completed.
-    pub episodes: usize,
+    agent: Agent,
+    buffer: ReplayBuffer,
+    /// Warm-start actions, plain agents' exploration, batch sampling.
+    rng: ChaCha8Rng,
+    /// The run seed (episode seeds derive from it).
+    seed: u64,
+    env_steps: u64,
+    episodes: usize,
 }
 
 impl Trainer {
-    /// A trainer around `agent` with an empty buffer sized by the agent's config.
+    /// A trainer around `agent` with an empty buffer sized by the agent's config, in the run
+    /// with seed `seed`.
     pub fn new(agent: Agent, seed: u64) -> Self {
         let cfg = agent.config();
         let buffer = ReplayBuffer::new(agent.obs_dim(), agent.act_dim(), cfg.buffer_size);
@@ -112,13 +141,39 @@ impl Trainer {
         }
     }
 
-    fn recurrent(&self) -> bool {
-        self.agent.actor().lstm_hidden().is_some()
-            || self
-                .agent
-                .critics()
-                .iter()
-                .any(|c| c.lstm_hidden().is_some())
+    /// The agent.
+    pub fn agent(&self) -> &Agent {
+        &self.agent
+    }
+
+    /// The agent, mutable (elitist replacement).
+    pub fn agent_mut(&mut self) -> &mut Agent {
+        &mut self.agent
+    }
+
+    /// The replay buffer.
+    pub fn buffer(&self) -> &ReplayBuffer {
+        &self.buffer
+    }
+
+    /// The run seed.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// Environment steps taken (warm start included).
+    pub fn env_steps(&self) -> u64 {
+        self.env_steps
+    }
+
+    /// Training episodes completed (plain training).
+    pub fn episodes(&self) -> usize {
+        self.episodes
+    }
+
+    /// Whether the warm-start steps are all taken, so learning may begin.
+    pub fn warmed_up(&self) -> bool {
+        self.env_steps >= self.agent.config().warm_start as u64
     }
 
     /// One gradient update on a fresh batch.
@@ -126,60 +181,64 @@ impl Trainer {
         let batch = sample_batch(
             &self.buffer,
             self.agent.config(),
-            self.recurrent(),
+            self.agent.recurrent(),
             &mut self.rng,
         );
         self.agent.update(&batch)
     }
 
-    /// Runs one training episode on `env`, learning along the way.
+    /// `cycles` gradient updates once the warm start is done (none before).
+    pub fn train(&mut self, cycles: usize) -> Result<LossMeans, AgentError> {
+        let mut losses = LossMeans::default();
+        if self.warmed_up() {
+            for _ in 0..cycles {
+                losses.add(&self.update()?);
+            }
+        }
+        Ok(losses)
+    }
+
+    /// Puts a finished episode's transitions into the buffer and counts its steps.
+    pub fn store(&mut self, episode: &Episode) {
+        episode.push_into(&mut self.buffer);
+        self.env_steps += episode.len() as u64;
+    }
+
+    /// Fills the buffer with random-action episodes until the warm-start budget is spent
+    /// (the hybrid loop's warm start; plain training warms up inside its episodes). Episode
+    /// seeds are [`Stream::WarmStartReset`] of the step each starts at. No-op once done;
+    /// returns the steps taken.
+    pub fn warm_start(&mut self, env: &mut dyn Env) -> u64 {
+        let target = self.agent.config().warm_start as u64;
+        let mut taken = 0;
+        while self.env_steps < target {
+            let seed = Stream::WarmStartReset(self.env_steps).seed(self.seed);
+            let left = (target - self.env_steps) as usize;
+            let ep = rollout(env, Actor::Random, seed, Some(left), &mut self.rng);
+            self.store(&ep);
+            taken += ep.len() as u64;
+        }
+        taken
+    }
+
+    /// Runs one training episode on `env` ([`Stream::EpisodeReset`] of its index), learning
+    /// along the way.
     pub fn episode(&mut self, env: &mut dyn Env) -> Result<EpisodeReport, AgentError> {
         let cfg = self.agent.config().clone();
         let env_seed = Stream::EpisodeReset(self.episodes as u64).seed(self.seed);
-        let mut obs = env.reset(env_seed);
-        let q0 = self.agent.q0(&obs);
         let mut policy = self.agent.policy();
         policy.reset();
-        let mut action = vec![0.0f32; env.act_dim()];
-        let mut losses = LossMeans::default();
-        let (mut ret, mut length, terminated);
-        ret = 0.0;
-        length = 0;
-        loop {
-            if self.env_steps < cfg.warm_start as u64 {
-                action
-                    .iter_mut()
-                    .for_each(|x| *x = self.rng.random_range(-1.0..=1.0));
-            } else {
-                policy.act(&obs, ActMode::Explore, &mut self.rng, &mut action);
-            }
-            let step = env.step(&action);
-            self.buffer.push(Transition {
-                obs: &obs,
-                action: &action,
-                reward: step.reward,
-                next_obs: &step.obs,
-                terminated: step.terminated,
-            });
-            self.env_steps += 1;
-            length += 1;
-            ret += f64::from(step.reward);
-            if let LearnEvery::Steps(n) = cfg.learn_every {
-                if self.env_steps >= cfg.warm_start as u64 && self.env_steps % n as u64 == 0 {
-                    for _ in 0..cfg.updates_per_learn {
-                        losses.add(&self.update()?);
-                    }
-                    policy.sync_from(self.agent.actor())?;
-                }
-            }
-            if step.terminated || step.truncated {
-                terminated = step.terminated;
-                break;
-            }
-            obs = step.obs;
-        }
+        let mut learning = Learning {
+            trainer: self,
+            policy,
+            losses: LossMeans::default(),
+            q0: f64::NAN,
+        };
+        let end = run_episode(env, env_seed, None, &mut learning)?;
+        let (losses, q0) = (learning.losses, learning.q0);
         self.buffer.end_episode();
-        if cfg.learn_every == LearnEvery::Episode && self.env_steps >= cfg.warm_start as u64 {
+        let mut losses = losses;
+        if cfg.learn_every == LearnEvery::Episode && self.warmed_up() {
             for _ in 0..cfg.updates_per_learn {
                 losses.add(&self.update()?);
             }
@@ -187,16 +246,152 @@ impl Trainer {
         let report = EpisodeReport {
             episode: self.episodes,
             env_steps: self.env_steps,
-            ret,
-            length,
-            terminated,
+            curve: end.ret,
+            ret: end.ret,
+            length: end.steps,
+            terminated: end.terminated,
             q0,
             critic_loss: losses.critic(),
             actor_loss: losses.actor(),
-            alpha: (self.agent.algo() == crate::Algo::Sac).then(|| self.agent.alpha()),
+            alpha: self.agent.has_entropy().then(|| self.agent.alpha()),
             updates: self.agent.updates(),
         };
         self.episodes += 1;
         Ok(report)
+    }
+
+    /// The counters and random streams.
+    pub fn state(&self) -> TrainerState {
+        let (agent_updates, agent_rng) = self.agent.counters();
+        TrainerState {
+            episodes: self.episodes,
+            env_steps: self.env_steps,
+            trainer_rng: self.rng.clone(),
+            agent_updates,
+            agent_rng,
+            episode_open: self.buffer.episode_open(),
+        }
+    }
+
+    /// Restores a saved state, the agent's tensors and the replay buffer.
+    pub fn restore(
+        &mut self,
+        state: TrainerState,
+        tensors: &HashMap<String, Vec<f32>>,
+        buffer: ReplayBuffer,
+    ) -> Result<(), AgentError> {
+        self.agent.load_state_tensors(tensors)?;
+        self.agent
+            .set_counters(state.agent_updates, state.agent_rng);
+        self.rng = state.trainer_rng;
+        self.env_steps = state.env_steps;
+        self.episodes = state.episodes;
+        self.buffer = buffer;
+        Ok(())
+    }
+}
+
+/// The hook of a training episode: acts (randomly during the warm start, else exploring),
+/// stores every transition, and learns every `learn_every` steps.
+struct Learning<'t> {
+    trainer: &'t mut Trainer,
+    policy: Policy,
+    losses: LossMeans,
+    q0: f64,
+}
+
+impl<E: Env + ?Sized> EpisodeHook<E> for Learning<'_> {
+    type Error = AgentError;
+
+    fn start(&mut self, obs: &[f32]) -> Result<(), AgentError> {
+        self.q0 = self.trainer.agent.q0(obs);
+        Ok(())
+    }
+
+    fn act(&mut self, obs: &[f32], action: &mut [f32]) {
+        let t = &mut *self.trainer;
+        if t.warmed_up() {
+            self.policy.act(obs, ActMode::Explore, &mut t.rng, action);
+        } else {
+            action
+                .iter_mut()
+                .for_each(|x| *x = t.rng.random_range(-1.0..=1.0));
+        }
+    }
+
+    fn step(&mut self, _: &E, obs: &[f32], action: &[f32], step: &Step) -> Result<(), AgentError> {
+        let t = &mut *self.trainer;
+        t.buffer.push(Transition {
+            obs,
+            action,
+            reward: step.reward,
+            next_obs: &step.obs,
+            terminated: step.terminated,
+        });
+        t.env_steps += 1;
+        let cfg = t.agent.config();
+        if let LearnEvery::Steps(n) = cfg.learn_every {
+            if t.warmed_up() && t.env_steps % n as u64 == 0 {
+                for _ in 0..cfg.updates_per_learn {
+                    self.losses.add(&t.update()?);
+                }
+                self.policy.sync_from(t.agent.actor())?;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Learner for Trainer {
+    type Row = EpisodeReport;
+    type State = TrainerState;
+    const UNIT: &'static str = "episode";
+
+    fn run_row(&mut self, envs: &MakeEnv) -> Result<EpisodeReport, AgentError> {
+        let mut env = envs();
+        self.episode(env.as_mut())
+    }
+
+    fn rows(&self) -> usize {
+        self.episodes
+    }
+
+    fn env_steps(&self) -> u64 {
+        self.env_steps
+    }
+
+    fn agent(&self) -> &Agent {
+        &self.agent
+    }
+
+    fn buffer(&self) -> &ReplayBuffer {
+        &self.buffer
+    }
+
+    fn state(&self) -> TrainerState {
+        Trainer::state(self)
+    }
+
+    fn tensors(&self) -> Vec<(String, Vec<f32>)> {
+        self.agent.state_tensors()
+    }
+
+    fn check(&self, state: &TrainerState, rows: usize) -> Result<(), AgentError> {
+        if state.episodes != rows {
+            return Err(state_error(
+                "episodes",
+                format!("= {} but rows = {rows}", state.episodes),
+            ));
+        }
+        Ok(())
+    }
+
+    fn restore(
+        &mut self,
+        state: TrainerState,
+        tensors: &HashMap<String, Vec<f32>>,
+        buffer: ReplayBuffer,
+    ) -> Result<(), AgentError> {
+        Trainer::restore(self, state, tensors, buffer)
     }
 }

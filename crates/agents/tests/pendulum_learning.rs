@@ -42,28 +42,28 @@ fn mlp(width: usize) -> NetConfig {
     }
 }
 
-fn pendulum_cfg() -> RlConfig {
+fn pendulum_cfg(algo: Algo) -> RlConfig {
     RlConfig {
         batch_size: 128,
-        ..RlConfig::default()
+        ..RlConfig::for_algo(algo)
     }
 }
 
 #[test]
 fn sac_feed_forward_learns_pendulum() {
-    let score = train(Algo::Sac, &mlp(128), &pendulum_cfg(), 1, 100);
+    let score = train(Algo::Sac, &mlp(128), &pendulum_cfg(Algo::Sac), 1, 100);
     assert!(score >= -250.0, "SAC last-10 mean {score:.1} < -250");
 }
 
 #[test]
 fn td3_feed_forward_learns_pendulum() {
-    let score = train(Algo::Td3, &mlp(128), &pendulum_cfg(), 1, 100);
+    let score = train(Algo::Td3, &mlp(128), &pendulum_cfg(Algo::Td3), 1, 100);
     assert!(score >= -250.0, "TD3 last-10 mean {score:.1} < -250");
 }
 
 #[test]
 fn ddpg_feed_forward_learns_pendulum() {
-    let score = train(Algo::Ddpg, &mlp(128), &pendulum_cfg(), 1, 100);
+    let score = train(Algo::Ddpg, &mlp(128), &pendulum_cfg(Algo::Ddpg), 1, 100);
     assert!(score >= -400.0, "DDPG last-10 mean {score:.1} < -400");
 }
 

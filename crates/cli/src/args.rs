@@ -1,6 +1,8 @@
 //! Command-line arguments of `esrl` (clap derive). `esrl --help` is generated from these docs.
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
+use esrl_run::Overrides;
+pub use esrl_run::{AgentKind, EnvKind, Preset};
 use std::path::PathBuf;
 
 /// Train, evaluate, compare and record humanoid walking controllers (ES-SAC, ES-TD3, ES-DDPG,
@@ -26,93 +28,6 @@ pub enum Command {
     Record(RecordArgs),
     /// Measure speed: environment steps, network passes, SAC updates, ES generations.
     Bench(BenchArgs),
-}
-
-/// The six agents.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum AgentKind {
-    /// Hybrid evolution strategy + SAC (the paper's method).
-    EsSac,
-    /// Hybrid evolution strategy + TD3.
-    EsTd3,
-    /// Hybrid evolution strategy + DDPG.
-    EsDdpg,
-    /// Soft actor-critic.
-    Sac,
-    /// Twin delayed DDPG.
-    Td3,
-    /// Deep deterministic policy gradient.
-    Ddpg,
-}
-
-impl AgentKind {
-    /// All six, in the paper's Table 1 order.
-    pub const ALL: [AgentKind; 6] = [
-        AgentKind::EsSac,
-        AgentKind::EsTd3,
-        AgentKind::EsDdpg,
-        AgentKind::Sac,
-        AgentKind::Td3,
-        AgentKind::Ddpg,
-    ];
-
-    /// The name used on the command line and in files (`es-sac`, …).
-    pub fn name(self) -> &'static str {
-        match self {
-            AgentKind::EsSac => "es-sac",
-            AgentKind::EsTd3 => "es-td3",
-            AgentKind::EsDdpg => "es-ddpg",
-            AgentKind::Sac => "sac",
-            AgentKind::Td3 => "td3",
-            AgentKind::Ddpg => "ddpg",
-        }
-    }
-
-    /// Whether the agent runs ES generations (true) or plain episodes (false).
-    pub fn is_hybrid(self) -> bool {
-        matches!(
-            self,
-            AgentKind::EsSac | AgentKind::EsTd3 | AgentKind::EsDdpg
-        )
-    }
-
-    /// Parses a name as written on the command line.
-    pub fn parse(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|a| a.name() == name.trim())
-    }
-}
-
-/// Which environment to train on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum EnvKind {
-    /// The humanoid on the 50 m track (the paper's task).
-    Walk,
-    /// Gymnasium's Pendulum-v1: a fast sanity task.
-    Pendulum,
-}
-
-/// Named sets of settings.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Preset {
-    /// The paper's numbers: N = 25, σ = 0.25, 50 inner cycles, 1500 generations/episodes.
-    Paper,
-    /// Visible learning on a 2-core machine in about 30 minutes.
-    Quick,
-    /// `quick` with 5× the gradient updates per generation and 895 generations: the ES-SAC
-    /// run (seed 0) that stays up 60 s, about 75 minutes on one core.
-    Long,
-    /// Seconds: tiny budget and networks, for tests.
-    Smoke,
-}
-
-/// The name of a preset as written on the command line and in `config.toml`.
-pub fn preset_name(preset: Preset) -> String {
-    preset
-        .to_possible_value()
-        .map_or_else(String::new, |v| v.get_name().to_owned())
 }
 
 /// Options shared by commands that train.
@@ -145,6 +60,22 @@ pub struct TrainOptions {
     /// Hide the progress bar (it is also hidden when stderr is not a terminal).
     #[arg(long)]
     pub no_progress: bool,
+}
+
+impl TrainOptions {
+    /// What these options set on top of the preset.
+    pub fn overrides(&self) -> Overrides {
+        Overrides {
+            preset: self.preset,
+            config: self.config.clone(),
+            env: self.env,
+            urdf: self.urdf.clone(),
+            threads: self.threads,
+            generations: self.generations,
+            episodes: self.episodes,
+            steps: self.steps,
+        }
+    }
 }
 
 /// `esrl train`.

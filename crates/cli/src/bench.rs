@@ -1,13 +1,10 @@
 //! `esrl bench`: speed of the environment, the networks, one SAC update and one ES generation.
 
-use crate::args::{Arch, BenchWhat, EnvKind, Preset};
-use crate::checkpoint::Learner;
-use crate::config::TrainConfig;
-use crate::train::{build_learner, env_factory};
+use crate::args::{AgentKind, Arch, BenchWhat, EnvKind, Preset};
 use anyhow::Result;
-use esrl_agents::{Agent, Algo, NetConfig, ReplayBuffer, RlConfig, Transition};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
+use esrl_agents::bench::{self, UpdateTiming};
+use esrl_agents::{Algo, Learner, NetConfig};
+use esrl_run::{build, AnyLearner, TrainConfig};
 use serde::Serialize;
 use serde_json::json;
 use std::time::Instant;
@@ -21,74 +18,15 @@ fn emit<T: Serialize>(json_out: bool, value: &T, text: String) -> Result<()> {
     Ok(())
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
-/// Times one full SAC update of `Agent::update` (critics, actor, α, targets) on random data of
-/// the PyTorch baseline's shapes: obs 31, act 6, 256 sequences × 8 steps (LSTM, no burn-in) or
-/// 256 transitions (MLP 256×256).
-pub fn update_ms(arch: Arch, reps: usize) -> Result<serde_json::Value> {
-    let (obs_dim, act_dim) = (31, 6);
+/// Times the one update of training, `Agent::update` (critics, actor, α, targets), for SAC
+/// with the paper-size LSTM or the MLP 256×256 networks, on random data of the PyTorch
+/// baseline's shapes (`esrl_agents::bench`).
+pub fn update_ms(arch: Arch, obs_dim: usize, reps: usize) -> Result<UpdateTiming> {
     let nets = match arch {
         Arch::Lstm => NetConfig::default(),
         Arch::Mlp => NetConfig::feed_forward(),
     };
-    let cfg = RlConfig {
-        burn_in: 0,
-        seq_len: 8,
-        batch_size: 256,
-        ..RlConfig::default()
-    };
-    let mut agent = Agent::new(Algo::Sac, obs_dim, act_dim, &nets, &cfg, 0)?;
-    let mut buf = ReplayBuffer::new(obs_dim, act_dim, 20_000);
-    let mut rng = ChaCha8Rng::seed_from_u64(0);
-    let mut o = vec![0.0f32; obs_dim];
-    let mut a = vec![0.0f32; act_dim];
-    for i in 0..20_000 {
-        o.iter_mut().for_each(|x| *x = rng.random_range(-1.0..1.0));
-        a.iter_mut().for_each(|x| *x = rng.random_range(-1.0..1.0));
-        let next: Vec<f32> = o.iter().map(|x| x * 0.9).collect();
-        buf.push(Transition {
-            obs: &o,
-            action: &a,
-            reward: rng.random_range(-1.0..1.0),
-            next_obs: &next,
-            terminated: i % 500 == 499,
-        });
-        if i % 500 == 499 {
-            buf.end_episode();
-        }
-    }
-    let sample = |rng: &mut ChaCha8Rng| match arch {
-        Arch::Lstm => buf.sample_sequences(rng, 256, 8, 0),
-        Arch::Mlp => buf.sample_transitions(rng, 256),
-    };
-    for _ in 0..2 {
-        let b = sample(&mut rng);
-        agent.update(&b)?;
-    }
-    let mut times = Vec::new();
-    for _ in 0..reps {
-        let b = sample(&mut rng);
-        let t = Instant::now();
-        agent.update(&b)?;
-        times.push(t.elapsed().as_secs_f64() * 1e3);
-    }
-    let (na, nc) = (
-        esrl_nn::Module::num_params(agent.actor()),
-        esrl_nn::Module::num_params(&agent.critics()[0]),
-    );
-    Ok(json!({
-        "arch": format!("{arch:?}").to_lowercase(),
-        "ms_per_update": median(times.clone()),
-        "min_ms": times.iter().copied().fold(f64::INFINITY, f64::min),
-        "reps": reps,
-        "actor_params": na,
-        "critic_params": nc,
-        "threads": 1,
-    }))
+    Ok(bench::time_update(Algo::Sac, &nets, obs_dim, 6, reps, 2)?)
 }
 
 /// Generations timed by `bench es` (without gradient updates, so the policies stay random).
@@ -96,19 +34,16 @@ const ES_BENCH_GENERATIONS: usize = 5;
 
 /// Times one ES generation's evaluation (no gradient updates) at `threads` threads.
 fn es_generation_s(preset: Preset, threads: usize) -> Result<(f64, u64)> {
-    let mut cfg = TrainConfig::preset(crate::args::AgentKind::EsSac, EnvKind::Walk, preset);
+    let mut cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, preset);
     cfg.inner_cycles = 0;
     cfg.rl.warm_start = 0;
-    let make_env = env_factory(&cfg)?;
-    let Learner::Hybrid(mut h) = build_learner(&cfg, &make_env)? else {
+    let envs = build::envs(cfg.env, &cfg.walk)?;
+    let AnyLearner::Hybrid(mut h) = build::learner(&cfg, &envs, threads)? else {
         anyhow::bail!("an ES agent builds a hybrid learner");
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()?;
     let t = Instant::now();
-    h.step(make_env.as_ref(), &pool)?;
-    Ok((t.elapsed().as_secs_f64(), h.trainer.env_steps))
+    h.step()?;
+    Ok((t.elapsed().as_secs_f64(), h.env_steps()))
 }
 
 /// Runs `esrl bench`.
@@ -133,7 +68,10 @@ pub fn run(what: &BenchWhat) -> Result<()> {
         BenchWhat::Nn { json } => {
             let r = esrl_nn::bench::run(&esrl_nn::bench::BenchConfig::default())?;
             let c = &r.config;
-            let ms = |x: Option<f64>| x.map_or_else(|| "–".to_string(), |v| format!("{v:.1} ms"));
+            // The full update is training's own (`Agent::update`), on the same shapes.
+            let lstm = update_ms(Arch::Lstm, c.obs_dim, c.reps)?;
+            let mlp = update_ms(Arch::Mlp, c.obs_dim, c.reps * 5)?;
+            let ms = |t: &UpdateTiming| format!("{:.1} ms", t.ms_per_update);
             let text = format!(
                 "forward + backward on {} × {} steps, one thread:\n  \
                  LSTM actor ({} params) {:.2} ms, critic ({} params) {:.2} ms, SAC update {}\n  \
@@ -144,21 +82,36 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                 r.actor_ms,
                 r.critic_params,
                 r.critic_ms,
-                ms(r.sac_update_ms),
+                ms(&lstm),
                 r.mlp_actor_params,
                 r.mlp_actor_ms,
                 r.mlp_critic_params,
                 r.mlp_critic_ms,
-                ms(r.mlp_sac_update_ms)
+                ms(&mlp)
             );
-            emit(*json, &r, text)
+            let mut value = serde_json::to_value(&r)?;
+            if let Some(m) = value.as_object_mut() {
+                m.insert("sac_update_ms".into(), json!(lstm.ms_per_update));
+                m.insert("mlp_sac_update_ms".into(), json!(mlp.ms_per_update));
+            }
+            emit(*json, &value, text)
         }
         BenchWhat::Update { arch, json } => {
-            let r = update_ms(*arch, 7)?;
+            let t = update_ms(*arch, 31, 7)?;
+            let arch = format!("{arch:?}").to_lowercase();
             let text = format!(
-                "one SAC update ({}): {:.2} ms median over {} reps (actor {} params, critic {} params)",
-                r["arch"], r["ms_per_update"].as_f64().unwrap_or(f64::NAN), r["reps"], r["actor_params"], r["critic_params"]
+                "one SAC update ({arch}): {:.2} ms median over {} reps (actor {} params, critic {} params)",
+                t.ms_per_update, t.reps, t.actor_params, t.critic_params
             );
+            let r = json!({
+                "arch": arch,
+                "ms_per_update": t.ms_per_update,
+                "min_ms": t.min_ms,
+                "reps": t.reps,
+                "actor_params": t.actor_params,
+                "critic_params": t.critic_params,
+                "threads": 1,
+            });
             emit(*json, &r, text)
         }
         BenchWhat::Es {
@@ -169,15 +122,13 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             let (t1, steps) = es_generation_s(*preset, 1)?;
             let (tn, _) = es_generation_s(*preset, *threads)?;
             let eff = t1 / (tn * *threads as f64);
-            let cfg = TrainConfig::preset(crate::args::AgentKind::EsSac, EnvKind::Walk, *preset);
+            let cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, *preset);
             let arch = if cfg.network.recurrent() {
                 Arch::Lstm
             } else {
                 Arch::Mlp
             };
-            let upd = update_ms(arch, 3)?["ms_per_update"]
-                .as_f64()
-                .unwrap_or(f64::NAN);
+            let upd = update_ms(arch, 31, 3)?.ms_per_update;
             let train_s = upd * cfg.inner_cycles as f64 / 1e3;
             let r = json!({
                 "preset": format!("{preset:?}").to_lowercase(),

@@ -35,15 +35,16 @@
 //! the same command again to resume them.
 
 use crate::args::{AgentKind, CompareArgs};
-use crate::config::TrainConfig;
-use crate::eval::{self, EvalReport, EVAL_FILE};
-use crate::run_dir::{write_atomic, RunDir};
 use anyhow::{bail, Context, Result};
-use clap::ValueEnum;
+use esrl_eval::{EvalReport, EVAL_FILE};
 use esrl_metrics::{
-    actuator_markdown, joint_markdown, summarize_method, table1, table1_csv, table1_markdown,
-    AgentRuns, SeedResult,
+    actuator_markdown, joint_markdown, q0_mean, summarize_method, table1, table1_csv,
+    table1_markdown, AgentRuns, SeedResult,
 };
+use esrl_run::checkpoint;
+use esrl_run::config::config_differences;
+use esrl_run::run_dir::write_atomic;
+use esrl_run::{RunDir, Summary, TrainConfig};
 use serde_json::Value;
 use std::collections::VecDeque;
 use std::fs;
@@ -111,24 +112,12 @@ pub enum RunState {
     Finished,
 }
 
-/// Reads `summary.json` of a run folder, if present.
-fn read_summary(dir: &Path) -> Result<Option<Value>> {
-    let p = dir.join(RunDir::SUMMARY);
-    if !p.exists() {
-        return Ok(None);
-    }
-    let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-    let v: Value =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
-    Ok(Some(v))
-}
-
 /// Classifies a run folder.
 pub fn run_state(dir: &Path) -> Result<RunState> {
-    if read_summary(dir)?.is_some_and(|s| s["finished"] == Value::Bool(true)) {
+    if Summary::read(dir)?.is_some_and(|s| s.finished) {
         return Ok(RunState::Finished);
     }
-    if crate::checkpoint::find(dir).is_some() {
+    if checkpoint::find(dir).is_some() {
         return Ok(RunState::Resumable);
     }
     if dir.join(RunDir::JSONL).exists() {
@@ -137,47 +126,9 @@ pub fn run_state(dir: &Path) -> Result<RunState> {
     Ok(RunState::Empty)
 }
 
-/// Paths (dotted) where two configs differ, the thread count excepted.
-pub fn config_differences(stored: &TrainConfig, wanted: &TrainConfig) -> Result<Vec<String>> {
-    fn walk(a: &toml::Value, b: &toml::Value, path: &str, out: &mut Vec<String>) {
-        match (a, b) {
-            (toml::Value::Table(x), toml::Value::Table(y)) => {
-                let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();
-                keys.sort();
-                keys.dedup();
-                for k in keys {
-                    let p = if path.is_empty() {
-                        k.clone()
-                    } else {
-                        format!("{path}.{k}")
-                    };
-                    match (x.get(k), y.get(k)) {
-                        (Some(va), Some(vb)) => walk(va, vb, &p, out),
-                        (va, vb) => out.push(format!(
-                            "{p}: {} vs {}",
-                            va.map_or("none".into(), ToString::to_string),
-                            vb.map_or("none".into(), ToString::to_string)
-                        )),
-                    }
-                }
-            }
-            _ if a != b => out.push(format!("{path}: {a} vs {b}")),
-            _ => {}
-        }
-    }
-    let mut a = toml::Table::try_from(stored)?;
-    let mut b = toml::Table::try_from(wanted)?;
-    a.remove("threads");
-    b.remove("threads");
-    let mut out = Vec::new();
-    walk(&toml::Value::Table(a), &toml::Value::Table(b), "", &mut out);
-    Ok(out)
-}
-
 /// Fails when the run folder's config differs from the plan's.
 fn check_config(plan: &Plan) -> Result<()> {
-    let path = plan.dir.join(RunDir::CONFIG);
-    let stored = TrainConfig::load(&path).with_context(|| {
+    let (stored, _) = checkpoint::run_config(&plan.dir).with_context(|| {
         format!(
             "{} holds a run whose config cannot be read; move it away or choose another --out",
             plan.dir.display()
@@ -321,17 +272,14 @@ pub struct BudgetRow {
 }
 
 fn budget_row(plan: &Plan, length: usize) -> Result<BudgetRow> {
-    let summary = read_summary(&plan.dir)?
+    let summary = Summary::read(&plan.dir)?
         .with_context(|| format!("{}: no summary.json", plan.dir.display()))?;
-    let env_steps = summary["env_steps"]
-        .as_u64()
-        .with_context(|| format!("{}: no `env_steps` in summary.json", plan.dir.display()))?;
     Ok(BudgetRow {
         run: plan.name(),
         length,
         generations: plan.agent.is_hybrid(),
-        env_steps,
-        wall_s: summary["wall_s"].as_f64().unwrap_or(f64::NAN),
+        env_steps: summary.env_steps,
+        wall_s: summary.wall_s,
     })
 }
 
@@ -359,12 +307,11 @@ pub fn budget_markdown(rows: &[BudgetRow]) -> String {
     out
 }
 
-/// The `curve` column and the mean of the finite `q0` values of a run's `metrics.jsonl`.
+/// The `curve` column of a run's `metrics.jsonl` and its mean Q₀ ([`q0_mean`]).
 pub fn read_curve(dir: &Path) -> Result<(Vec<f64>, Option<f64>)> {
     let p = dir.join(RunDir::JSONL);
     let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-    let mut curve = Vec::new();
-    let (mut q_sum, mut q_n) = (0.0, 0usize);
+    let (mut curve, mut q0) = (Vec::new(), Vec::new());
     for (i, line) in text
         .lines()
         .enumerate()
@@ -376,15 +323,12 @@ pub fn read_curve(dir: &Path) -> Result<(Vec<f64>, Option<f64>)> {
             .as_f64()
             .with_context(|| format!("{} line {}: no numeric `curve`", p.display(), i + 1))?;
         curve.push(c);
-        if let Some(q) = row["q0"].as_f64().filter(|q| q.is_finite()) {
-            q_sum += q;
-            q_n += 1;
-        }
+        q0.extend(row["q0"].as_f64());
     }
     if curve.is_empty() {
         bail!("{} has no rows", p.display());
     }
-    Ok((curve, (q_n > 0).then(|| q_sum / q_n as f64)))
+    Ok((curve, q0_mean(&q0)))
 }
 
 /// The run's `eval.json` if it covers `episodes` episodes from seed 0 of its current
@@ -392,7 +336,7 @@ pub fn read_curve(dir: &Path) -> Result<(Vec<f64>, Option<f64>)> {
 fn evaluation(dir: &Path, episodes: usize) -> Result<EvalReport> {
     let p = dir.join(EVAL_FILE);
     let mtime = |p: &Path| fs::metadata(p).and_then(|m| m.modified()).ok();
-    if let (Some((_, ckpt)), Ok(text)) = (eval::locate(dir).ok(), fs::read_to_string(&p)) {
+    if let (Some((_, ckpt)), Ok(text)) = (esrl_eval::locate(dir).ok(), fs::read_to_string(&p)) {
         if let Ok(r) = serde_json::from_str::<EvalReport>(&text) {
             let fresh = match (mtime(&p), mtime(&ckpt.join("state.json"))) {
                 (Some(e), Some(c)) => e >= c,
@@ -410,8 +354,8 @@ fn evaluation(dir: &Path, episodes: usize) -> Result<EvalReport> {
             }
         }
     }
-    let loaded = eval::load_run(dir)?;
-    eval::evaluate_and_write(&loaded, 0, episodes, None)
+    let loaded = esrl_eval::load_run(dir)?;
+    Ok(esrl_eval::evaluate_and_write(&loaded, 0, episodes, None)?)
 }
 
 /// Sets `max_env_steps = budget` and enough generations/episodes to spend it.
@@ -427,9 +371,9 @@ fn apply_budget(cfg: &mut TrainConfig, budget: u64) {
 }
 
 fn env_steps_of(dir: &Path) -> Result<u64> {
-    read_summary(dir)?
-        .and_then(|s| s["env_steps"].as_u64())
-        .with_context(|| format!("{}: no `env_steps` in summary.json", dir.display()))
+    Summary::read(dir)?
+        .map(|s| s.env_steps)
+        .with_context(|| format!("{}: no summary.json", dir.display()))
 }
 
 /// Runs `esrl compare`.
@@ -460,7 +404,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let mut plans = Vec::new();
     for &agent in &agents {
         for seed in 0..args.seeds {
-            let config = TrainConfig::resolve(agent, &args.opts, Some(seed))?;
+            let config = TrainConfig::resolve(agent, &args.opts.overrides(), Some(seed))?;
             plans.push(Plan {
                 agent,
                 seed,
@@ -483,7 +427,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             agent: reference_agent,
             seed: 0,
             dir: out.join(run_name(reference_agent, 0)),
-            config: TrainConfig::resolve(reference_agent, &args.opts, Some(0))?,
+            config: TrainConfig::resolve(reference_agent, &args.opts.overrides(), Some(0))?,
         };
         reference.config.threads = args.opts.threads.unwrap_or(cores);
         ensure_trained(&reference, !args.opts.no_progress, "[budget]")
@@ -591,11 +535,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         let joints = joint_markdown(&rows);
         let has_gait = rows.iter().any(|r| r.gait_runs > 0);
         let has_joints = rows.iter().any(|r| !r.joint_names.is_empty());
-        let preset = args
-            .opts
-            .preset
-            .to_possible_value()
-            .map_or_else(String::new, |v| v.get_name().to_owned());
+        let preset = args.opts.preset.name();
         let mut md = format!(
             "# esrl compare: {} (preset {preset}, seeds 0 to {})\n\n",
             agents

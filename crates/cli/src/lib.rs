@@ -1,16 +1,14 @@
-//! The esrl library behind the `esrl` command: configs, run folders, checkpoints and the
-//! training, evaluation, comparison, recording and benchmark drivers.
+//! The `esrl` command: parses the arguments, builds what the core crates describe, loops
+//! and prints. Training is `esrl_run::Training` driving an `esrl_agents::Learner`;
+//! evaluation and recording are `esrl_eval`; this crate adds the command line, progress
+//! display, stop signals, the multi-run comparison and the benchmarks.
 
 pub mod args;
 pub mod bench;
-pub mod checkpoint;
 pub mod compare;
-pub mod config;
 pub mod eval;
 pub mod record;
-pub mod run_dir;
 pub mod signals;
-pub mod stick;
 pub mod train;
 
 /// An error and its causes on one line, `outer: inner: …`, leaving out a cause whose text

@@ -1,13 +1,14 @@
-//! The hybrid ES-X loop of the paper's §4–5 (Fig. 3), X ∈ {SAC, TD3, DDPG}.
+//! The hybrid ES-X loop of the paper's §4–5 (Fig. 3), X ∈ {SAC, TD3, DDPG}, as ask/tell.
 //!
-//! One generation ([`Hybrid::step`]):
-//! 1. the population: the RL agent's current actor (individual 0) and N − 1 perturbations
-//!    θ + σεᵢ of the ES mean (eq. 8);
-//! 2. every individual runs K episodes, in parallel on a rayon pool; all individuals of a
-//!    generation see the same K initial states (common random numbers, so fitness differences
-//!    come from the policies); fitness is the mean return (eq. 9); every transition goes into
-//!    the shared replay buffer, in individual order;
-//! 3. the elites update θ and σ (eqs. 10, 11);
+//! One generation ([`Hybrid::step`] = [`Hybrid::ask`], an [`Evaluator`], [`Hybrid::tell`]):
+//! 1. [`ask`](Hybrid::ask): the population, the RL agent's current actor (individual 0) and
+//!    N − 1 perturbations θ + σεᵢ of the ES mean (eq. 8), each a [`Genome`] with its seeds;
+//! 2. the evaluator rolls every genome out ([`rollout_genome`](crate::rollout_genome)), K
+//!    episodes each, anywhere: all individuals of a generation see the same K initial states
+//!    (common random numbers, so fitness differences come from the policies); fitness is the
+//!    mean return (eq. 9);
+//! 3. [`tell`](Hybrid::tell) puts every transition into the shared replay buffer, in
+//!    individual order, and the elites update θ and σ (eqs. 10, 11);
 //! 4. elitist replacement: if the best individual's fitness beats the RL actor's, the RL actor
 //!    takes its parameters (for ES-SAC, log α too);
 //! 5. the RL agent runs its inner training cycles (one minibatch update each) on the buffer,
@@ -28,17 +29,20 @@
 //! The learning curve is the best fitness of each generation (the fitness of the policy kept
 //! at step 4); [`Hybrid::kept`] is that policy's genome, for `RUN/best/`.
 //!
-//! Results do not depend on the thread count: every individual's rollouts use random streams
-//! keyed by (seed, generation, individual), and results are gathered in individual order.
+//! Results do not depend on the thread count or on the evaluator: every individual's
+//! rollouts use the random streams its genome names, and results are taken in individual
+//! order.
 
+use crate::evaluate::{Evaluation, Evaluator, Generation, Genome, RolloutSpec};
 use crate::strategy::{rank, EsConfig, Fitness, LoopOrder, Strategy};
-use esrl_agents::rollout::{rollout, Actor as Acting};
-use esrl_agents::train::LossMeans;
-use esrl_agents::{ActMode, Agent, AgentError, Algo, Episode, Policy, Trainer};
-use esrl_sim::Env;
+use esrl_agents::learner::{Learner, LearnerState, Row, TrainerState};
+use esrl_agents::{ActMode, Agent, AgentError, ReplayBuffer, Trainer};
+use esrl_sim::MakeEnv;
 use esrl_streams::Stream;
-use rayon::prelude::*;
+use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::sync::Arc;
 
 /// One generation's row of `metrics.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -81,6 +85,31 @@ pub struct GenerationReport {
     pub q0: f64,
     /// Mean episode length over the generation's rollouts.
     pub mean_length: f64,
+}
+
+impl Row for GenerationReport {
+    fn curve(&self) -> f64 {
+        self.curve
+    }
+
+    fn q0(&self) -> f64 {
+        self.q0
+    }
+
+    fn env_steps(&self) -> u64 {
+        self.env_steps
+    }
+
+    fn summary(&self) -> String {
+        format!(
+            "gen {}: best {:.1}, RL actor {:.1}{}, σ {:.3}",
+            self.generation,
+            self.best_fitness,
+            self.rl_fitness,
+            if self.rl_replaced { " (replaced)" } else { "" },
+            self.sigma
+        )
+    }
 }
 
 /// Counts over a run's generations that show whether the gradient work pays: how often the
@@ -127,41 +156,92 @@ impl LoopStats {
     }
 }
 
-/// The hybrid trainer: an RL trainer (agent + buffer) and the ES distribution.
+/// The counters and streams of a hybrid run (`state.json`): the RL side's
+/// ([`TrainerState`], whose fields it repeats so that the file stays flat: serde cannot read
+/// a flattened random stream back), and the loop's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HybridState {
+    /// Always 0: the hybrid loop runs generations, not training episodes.
+    pub episodes: usize,
+    /// Environment steps taken.
+    pub env_steps: u64,
+    /// The trainer's random stream.
+    pub trainer_rng: ChaCha8Rng,
+    /// Gradient updates done.
+    pub agent_updates: u64,
+    /// The agent's random stream.
+    pub agent_rng: ChaCha8Rng,
+    /// Whether the replay buffer's last episode is still open.
+    pub episode_open: bool,
+    /// Generations completed.
+    pub generations: usize,
+    /// ES σ.
+    pub sigma: Option<f64>,
+    /// The ES distribution's generation counter.
+    pub es_generation: Option<u64>,
+    /// Whether the RL actor carries inner updates not yet evaluated. Absent in checkpoints
+    /// written before this field existed: then true after generation 0 with inner cycles.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rl_trained: Option<bool>,
+    /// The loop's counts so far (absent in older checkpoints).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub loop_stats: Option<LoopStats>,
+}
+
+impl HybridState {
+    /// The RL side's part.
+    pub fn trainer(&self) -> TrainerState {
+        TrainerState {
+            episodes: self.episodes,
+            env_steps: self.env_steps,
+            trainer_rng: self.trainer_rng.clone(),
+            agent_updates: self.agent_updates,
+            agent_rng: self.agent_rng.clone(),
+            episode_open: self.episode_open,
+        }
+    }
+}
+
+impl LearnerState for HybridState {
+    fn env_steps(&self) -> u64 {
+        self.env_steps
+    }
+
+    fn episode_open(&self) -> bool {
+        self.episode_open
+    }
+}
+
+/// The hybrid learner: an RL trainer (agent + buffer), the ES distribution, and the
+/// evaluator that rolls its populations out.
 #[derive(Debug, Clone)]
 pub struct Hybrid {
-    /// The RL side: agent, replay buffer, random stream, step counter.
-    pub trainer: Trainer,
-    /// The ES distribution.
-    pub strategy: Strategy,
-    /// ES settings.
-    pub es: EsConfig,
-    /// Gradient updates per generation.
-    pub inner_cycles: usize,
-    /// Generations completed.
-    pub generation: usize,
-    /// The genome of the last generation's best individual: the policy whose fitness is that
-    /// generation's learning-curve value (empty before the first generation). The RL actor
-    /// differs from it by the inner updates that followed replacement.
-    pub kept: Vec<f32>,
-    /// Whether the RL actor carries inner-training updates not yet evaluated (it will be
-    /// individual 0 of the next generation).
-    pub rl_trained: bool,
-    /// Counts over the generations run so far.
-    pub stats: LoopStats,
+    trainer: Trainer,
+    strategy: Strategy,
+    es: EsConfig,
+    inner_cycles: usize,
+    generation: usize,
+    /// The genome of the last generation's best individual (empty before the first).
+    kept: Vec<f32>,
+    /// Whether the RL actor carries inner-training updates not yet evaluated.
+    rl_trained: bool,
+    stats: LoopStats,
+    evaluator: Arc<dyn Evaluator>,
 }
 
-/// What one individual's evaluation produced.
-struct Evaluated {
-    /// Mean return of the scored rollouts (eq. 9).
-    fitness: f64,
-    /// Every rollout, in the order they go into the buffer.
-    episodes: Vec<Episode>,
-}
+/// The tensor of a checkpoint that holds the ES mean θ.
+const ES_MEAN: &str = "es.mean";
 
 impl Hybrid {
-    /// Starts the ES distribution at the agent's own genome.
-    pub fn new(agent: Agent, es: EsConfig, inner_cycles: usize, seed: u64) -> Self {
+    /// Starts the ES distribution at the agent's own genome, in the run with seed `seed`;
+    /// `evaluator` rolls the populations out.
+    pub fn new(
+        agent: Agent,
+        es: EsConfig,
+        inner_cycles: usize,
+        seed: u64,
+        evaluator: Arc<dyn Evaluator>,
+    ) -> Self {
         let strategy = Strategy::new(agent.genome(), es.sigma, seed);
         Self {
             trainer: Trainer::new(agent, seed),
@@ -172,30 +252,68 @@ impl Hybrid {
             kept: Vec::new(),
             rl_trained: false,
             stats: LoopStats::default(),
+            evaluator,
         }
+    }
+
+    /// The RL side: agent, replay buffer, random stream, step counter.
+    pub fn trainer(&self) -> &Trainer {
+        &self.trainer
+    }
+
+    /// The RL side, mutable.
+    pub fn trainer_mut(&mut self) -> &mut Trainer {
+        &mut self.trainer
+    }
+
+    /// The ES distribution.
+    pub fn strategy(&self) -> &Strategy {
+        &self.strategy
+    }
+
+    /// The ES settings.
+    pub fn es(&self) -> &EsConfig {
+        &self.es
+    }
+
+    /// Gradient updates per generation.
+    pub fn inner_cycles(&self) -> usize {
+        self.inner_cycles
+    }
+
+    /// Sets the gradient updates of the following generations (0 isolates the evaluation
+    /// and replacement, as the loop's tests do).
+    pub fn set_inner_cycles(&mut self, cycles: usize) {
+        self.inner_cycles = cycles;
+    }
+
+    /// Generations completed.
+    pub fn generation(&self) -> usize {
+        self.generation
+    }
+
+    /// The genome of the last generation's best individual: the policy whose fitness is that
+    /// generation's learning-curve value (empty before the first generation). The RL actor
+    /// differs from it by the inner updates that followed replacement.
+    pub fn kept(&self) -> &[f32] {
+        &self.kept
+    }
+
+    /// Whether the RL actor carries inner-training updates not yet evaluated (it will be
+    /// individual 0 of the next generation).
+    pub fn rl_trained(&self) -> bool {
+        self.rl_trained
+    }
+
+    /// Counts over the generations run so far.
+    pub fn stats(&self) -> &LoopStats {
+        &self.stats
     }
 
     /// Fills the buffer with random-action episodes until the warm-start budget is spent
     /// (no-op once done). Returns the steps taken.
-    pub fn warm_start(&mut self, env: &mut dyn Env) -> u64 {
-        let target = self.trainer.agent.config().warm_start as u64;
-        let mut taken = 0;
-        while self.trainer.env_steps < target {
-            let seed = Stream::WarmStartReset(self.trainer.env_steps).seed(self.trainer.seed);
-            let left = (target - self.trainer.env_steps) as usize;
-            let ep = rollout(
-                env,
-                Acting::Random,
-                seed,
-                Some(left),
-                &mut self.trainer.rng,
-                |_| {},
-            );
-            ep.push_into(&mut self.trainer.buffer);
-            self.trainer.env_steps += ep.len() as u64;
-            taken += ep.len() as u64;
-        }
-        taken
+    pub fn warm_start(&mut self, env: &mut dyn esrl_sim::Env) -> u64 {
+        self.trainer.warm_start(env)
     }
 
     /// This generation's individuals: the RL actor's genome first, then N − 1 perturbations of
@@ -203,124 +321,109 @@ impl Hybrid {
     pub fn population(&self) -> Vec<Vec<f32>> {
         let n = self.es.population;
         let mut genomes = Vec::with_capacity(n);
-        genomes.push(self.trainer.agent.genome());
+        genomes.push(self.trainer.agent().genome());
         genomes.extend((1..n).map(|i| self.strategy.perturbation(i)));
         genomes
     }
 
-    /// The rollouts of one evaluation: `(mode, scored)` pairs, run in this order from the same
-    /// initial state.
-    fn rollout_plan(&self) -> &'static [(ActMode, bool)] {
-        const EXPLORE: &[(ActMode, bool)] = &[(ActMode::Explore, true)];
-        const DETERMINISTIC: &[(ActMode, bool)] = &[(ActMode::Deterministic, true)];
-        const BOTH: &[(ActMode, bool)] =
-            &[(ActMode::Explore, false), (ActMode::Deterministic, true)];
+    /// The rollouts of one evaluation, run in this order from the same initial state.
+    fn rollout_plan(&self) -> Vec<RolloutSpec> {
+        let spec = |mode, scored| RolloutSpec { mode, scored };
+        let explore = vec![spec(ActMode::Explore, true)];
+        let deterministic = vec![spec(ActMode::Deterministic, true)];
         match self.es.fitness {
-            Fitness::Auto if self.trainer.agent.algo() == Algo::Sac => EXPLORE,
-            Fitness::Auto | Fitness::Deterministic => DETERMINISTIC,
-            Fitness::Sampled => EXPLORE,
-            Fitness::Both => BOTH,
+            Fitness::Auto if self.trainer.agent().has_entropy() => explore,
+            Fitness::Auto | Fitness::Deterministic => deterministic,
+            Fitness::Sampled => explore,
+            Fitness::Both => vec![
+                spec(ActMode::Explore, false),
+                spec(ActMode::Deterministic, true),
+            ],
         }
     }
 
-    /// Evaluates `genomes` on the pool (step 2), each on the generation's K initial states.
-    fn evaluate(
-        &self,
-        genomes: &[Vec<f32>],
-        make_env: &(dyn Fn() -> Box<dyn Env> + Sync),
-        pool: &rayon::ThreadPool,
-    ) -> Result<Vec<Evaluated>, AgentError> {
-        let agent = &self.trainer.agent;
-        let gen = self.generation as u64;
-        let seed = self.trainer.seed;
-        let k = self.es.evaluations;
-        let plan = self.rollout_plan();
-        let scored_per_eval = plan.iter().filter(|(_, scored)| *scored).count();
-        let evaluate_one = |i: usize, genome: &Vec<f32>| -> Result<Evaluated, AgentError> {
-            let mut env = make_env();
-            let mut policy: Policy = agent.policy_from_genome(genome)?;
-            let mut rng = Stream::Individual {
-                generation: gen,
-                index: i as u64,
-            }
-            .rng(seed);
-            let mut episodes = Vec::with_capacity(k * plan.len());
-            let mut score = 0.0;
-            for e in 0..k {
-                let env_seed = Stream::EvaluationReset {
+    /// Step 1: the generation to evaluate, each genome with its action stream, the
+    /// generation's K initial states and the rollouts of `es.fitness`.
+    pub fn ask(&self) -> Generation {
+        let (seed, gen) = (self.trainer.seed(), self.generation as u64);
+        let k = self.es.evaluations as u64;
+        let env_seeds: Vec<u64> = (0..k)
+            .map(|evaluation| {
+                Stream::EvaluationReset {
                     generation: gen,
-                    evaluation: e as u64,
-                    evaluations: k as u64,
+                    evaluation,
+                    evaluations: k,
                 }
-                .seed(seed);
-                for &(mode, scored) in plan {
-                    let ep = rollout(
-                        env.as_mut(),
-                        Acting::Policy(&mut policy, mode),
-                        env_seed,
-                        None,
-                        &mut rng,
-                        |_| {},
-                    );
-                    if scored {
-                        score += ep.ret;
-                    }
-                    episodes.push(ep);
-                }
-            }
-            Ok(Evaluated {
-                fitness: score / (k * scored_per_eval) as f64,
-                episodes,
+                .seed(seed)
             })
-        };
-        let evaluated: Vec<Result<Evaluated, AgentError>> = pool.install(|| {
-            genomes
-                .par_iter()
-                .enumerate()
-                .map(|(i, g)| evaluate_one(i, g))
-                .collect()
-        });
-        evaluated.into_iter().collect()
-    }
-
-    /// The inner training cycles (step 5), once the warm start is in the buffer.
-    fn train(&mut self) -> Result<LossMeans, AgentError> {
-        let mut losses = LossMeans::default();
-        if self.trainer.env_steps >= self.trainer.agent.config().warm_start as u64 {
-            for _ in 0..self.inner_cycles {
-                losses.add(&self.trainer.update()?);
-            }
+            .collect();
+        let rollouts = self.rollout_plan();
+        let genomes = self
+            .population()
+            .into_iter()
+            .enumerate()
+            .map(|(index, params)| Genome {
+                index,
+                params,
+                action_seed: Stream::Individual {
+                    generation: gen,
+                    index: index as u64,
+                }
+                .seed(seed),
+                env_seeds: env_seeds.clone(),
+                rollouts: rollouts.clone(),
+            })
+            .collect();
+        Generation {
+            index: self.generation,
+            policy: self.trainer.agent().policy(),
+            genomes,
         }
-        Ok(losses)
     }
 
-    /// Runs one generation. `make_env` builds an environment per individual (called from pool
-    /// threads); `pool` runs the rollouts.
-    pub fn step(
+    /// Steps 3–5 on the evaluations of [`Hybrid::ask`]'s generation, in individual order:
+    /// the transitions into the buffer, the ES update, elitist replacement and the inner
+    /// training cycles, in the configured order. Returns the generation's row.
+    pub fn tell(
         &mut self,
-        make_env: &(dyn Fn() -> Box<dyn Env> + Sync),
-        pool: &rayon::ThreadPool,
+        generation: &Generation,
+        evaluated: Vec<Evaluation>,
     ) -> Result<GenerationReport, AgentError> {
-        let n = self.es.population;
-        let genomes = self.population();
+        let genomes = &generation.genomes;
+        let n = genomes.len();
+        if generation.index != self.generation || evaluated.len() != n {
+            return Err(AgentError::State {
+                field: "evaluations".into(),
+                reason: format!(
+                    "{} evaluations of generation {} told to generation {} of {n} individuals",
+                    evaluated.len(),
+                    generation.index,
+                    self.generation
+                ),
+            });
+        }
         let rl_trained = self.rl_trained;
 
-        // 2. Evaluate; every transition into the buffer, in individual order.
-        let evaluated = self.evaluate(&genomes, make_env, pool)?;
+        // Every transition into the buffer, in individual order.
         let mut steps = 0usize;
         let mut rollouts = 0usize;
         for ev in &evaluated {
             for ep in &ev.episodes {
-                ep.push_into(&mut self.trainer.buffer);
+                self.trainer.store(ep);
                 steps += ep.len();
                 rollouts += 1;
             }
         }
-        self.trainer.env_steps += steps as u64;
+        // Every individual's first rollout starts from the generation's first initial state.
+        let obs0 = evaluated
+            .first()
+            .and_then(|e| e.episodes.first())
+            .map(|ep| ep.first_obs().to_vec())
+            .unwrap_or_default();
 
         // 3. The ES update.
         let fitness: Vec<f64> = evaluated.iter().map(|e| e.fitness).collect();
-        let refs: Vec<&[f32]> = genomes.iter().map(Vec::as_slice).collect();
+        let refs: Vec<&[f32]> = genomes.iter().map(|g| g.params.as_slice()).collect();
         let order = self.strategy.update(&refs, &fitness, &self.es);
         let best = order[0];
         let replaced = best != 0 && fitness[best] > fitness[0];
@@ -329,14 +432,14 @@ impl Hybrid {
         let losses = match self.es.order {
             LoopOrder::ReplaceThenTrain => {
                 if replaced {
-                    self.trainer.agent.set_genome(&genomes[best])?;
+                    self.trainer.agent_mut().set_genome(&genomes[best].params)?;
                 }
-                self.train()?
+                self.trainer.train(self.inner_cycles)?
             }
             LoopOrder::TrainThenReplace => {
-                let losses = self.train()?;
+                let losses = self.trainer.train(self.inner_cycles)?;
                 if replaced {
-                    self.trainer.agent.set_genome(&genomes[best])?;
+                    self.trainer.agent_mut().set_genome(&genomes[best].params)?;
                 }
                 losses
             }
@@ -346,23 +449,14 @@ impl Hybrid {
             LoopOrder::ReplaceThenTrain => trained_now,
             LoopOrder::TrainThenReplace => trained_now && !replaced,
         };
-        self.kept.clone_from(&genomes[best]);
+        self.kept.clone_from(&genomes[best].params);
 
         let rl_rank = order.iter().position(|&i| i == 0).unwrap_or(n);
         let finite: Vec<f64> = fitness.iter().copied().filter(|f| f.is_finite()).collect();
-        let mut env0 = make_env();
-        let k = self.es.evaluations as u64;
-        let obs0 = env0.reset(
-            Stream::EvaluationReset {
-                generation: self.generation as u64,
-                evaluation: 0,
-                evaluations: k,
-            }
-            .seed(self.trainer.seed),
-        );
+        let agent = self.trainer.agent();
         let report = GenerationReport {
             generation: self.generation,
-            env_steps: self.trainer.env_steps,
+            env_steps: self.trainer.env_steps(),
             curve: fitness[best],
             best_fitness: fitness[best],
             mean_fitness: finite.iter().sum::<f64>() / finite.len().max(1) as f64,
@@ -373,15 +467,170 @@ impl Hybrid {
             rl_elite: rl_rank < self.es.elites(),
             rl_replaced: replaced,
             sigma: self.strategy.sigma,
-            alpha: (self.trainer.agent.algo() == Algo::Sac).then(|| self.trainer.agent.alpha()),
+            alpha: agent.has_entropy().then(|| agent.alpha()),
             critic_loss: losses.critic(),
             actor_loss: losses.actor(),
-            q0: self.trainer.agent.q0(&obs0),
+            q0: agent.q0(&obs0),
             mean_length: steps as f64 / rollouts.max(1) as f64,
         };
         self.stats.add(&report);
         self.generation += 1;
         Ok(report)
+    }
+
+    /// Runs one generation: [`Hybrid::ask`], the evaluator, [`Hybrid::tell`].
+    pub fn step(&mut self) -> Result<GenerationReport, AgentError> {
+        let generation = self.ask();
+        let evaluated = self.evaluator.evaluate(&generation)?;
+        self.tell(&generation, evaluated)
+    }
+}
+
+impl Learner for Hybrid {
+    type Row = GenerationReport;
+    type State = HybridState;
+    const UNIT: &'static str = "generation";
+
+    /// The warm start, from one environment of `envs`.
+    fn prepare(&mut self, envs: &MakeEnv) -> Result<(), AgentError> {
+        let mut env = envs();
+        self.warm_start(env.as_mut());
+        Ok(())
+    }
+
+    /// One generation on the hybrid's own evaluator (which has its own environments).
+    fn run_row(&mut self, _envs: &MakeEnv) -> Result<GenerationReport, AgentError> {
+        self.step()
+    }
+
+    fn rows(&self) -> usize {
+        self.generation
+    }
+
+    fn env_steps(&self) -> u64 {
+        self.trainer.env_steps()
+    }
+
+    fn agent(&self) -> &Agent {
+        self.trainer.agent()
+    }
+
+    fn buffer(&self) -> &ReplayBuffer {
+        self.trainer.buffer()
+    }
+
+    /// The agent with the actor (and, for ES-SAC, log α) of the last generation's best
+    /// individual ([`Hybrid::kept`]).
+    fn scored_agent(&self) -> Result<Option<Agent>, AgentError> {
+        if self.kept.is_empty() {
+            return Ok(None);
+        }
+        let mut agent = self.trainer.agent().clone();
+        agent.set_genome(&self.kept)?;
+        Ok(Some(agent))
+    }
+
+    fn summary(&self) -> Vec<(&'static str, Option<f64>)> {
+        vec![
+            ("rl_trained_best_share", self.stats.trained_best_share()),
+            ("rl_trained_elite_share", self.stats.trained_elite_share()),
+            ("rl_replaced_share", self.stats.replaced_share()),
+        ]
+    }
+
+    fn state(&self) -> HybridState {
+        let t = self.trainer.state();
+        HybridState {
+            episodes: t.episodes,
+            env_steps: t.env_steps,
+            trainer_rng: t.trainer_rng,
+            agent_updates: t.agent_updates,
+            agent_rng: t.agent_rng,
+            episode_open: t.episode_open,
+            generations: self.generation,
+            sigma: Some(self.strategy.sigma),
+            es_generation: Some(self.strategy.generation),
+            rl_trained: Some(self.rl_trained),
+            loop_stats: Some(self.stats.clone()),
+        }
+    }
+
+    fn tensors(&self) -> Vec<(String, Vec<f32>)> {
+        let mut tensors = self.trainer.agent().state_tensors();
+        tensors.push((ES_MEAN.into(), self.strategy.mean.clone()));
+        tensors
+    }
+
+    /// Refuses a state whose generation count is not `rows`, whose σ lies outside the range
+    /// eq. 11 keeps it in, or whose ES generation counter disagrees.
+    fn check(&self, state: &HybridState, rows: usize) -> Result<(), AgentError> {
+        let bad = |field: &str, reason: String| {
+            Err(AgentError::State {
+                field: field.into(),
+                reason,
+            })
+        };
+        if state.generations != rows {
+            return bad(
+                "generations",
+                format!("= {} but rows = {rows}", state.generations),
+            );
+        }
+        let Some(sigma) = state.sigma else {
+            return bad("sigma", "is missing for an ES run".into());
+        };
+        let (lo, hi) = (
+            self.es.sigma.min(self.es.sigma_min),
+            self.es.sigma.max(self.es.sigma_min),
+        );
+        if !(sigma.is_finite() && sigma >= lo * (1.0 - 1e-9) && sigma <= hi * (1.0 + 1e-9)) {
+            return bad(
+                "sigma",
+                format!("= {sigma}, outside [{lo}, {hi}] where eq. 11 keeps it"),
+            );
+        }
+        if state.es_generation != Some(state.generations as u64) {
+            return bad(
+                "es_generation",
+                format!(
+                    "= {:?} but generations = {}",
+                    state.es_generation, state.generations
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    fn restore(
+        &mut self,
+        state: HybridState,
+        tensors: &HashMap<String, Vec<f32>>,
+        buffer: ReplayBuffer,
+    ) -> Result<(), AgentError> {
+        let mean = tensors.get(ES_MEAN).ok_or_else(|| AgentError::State {
+            field: ES_MEAN.into(),
+            reason: "the checkpoint lacks this tensor".into(),
+        })?;
+        if mean.len() != self.strategy.mean.len() {
+            return Err(AgentError::State {
+                field: ES_MEAN.into(),
+                reason: format!(
+                    "has {} values, expected {}",
+                    mean.len(),
+                    self.strategy.mean.len()
+                ),
+            });
+        }
+        self.trainer.restore(state.trainer(), tensors, buffer)?;
+        self.strategy.mean.clone_from(mean);
+        self.strategy.sigma = state.sigma.unwrap_or(self.strategy.sigma);
+        self.strategy.generation = state.es_generation.unwrap_or(0);
+        self.generation = state.generations;
+        self.rl_trained = state
+            .rl_trained
+            .unwrap_or(self.generation > 0 && self.inner_cycles > 0);
+        self.stats = state.loop_stats.unwrap_or_default();
+        Ok(())
     }
 }
 
@@ -393,14 +642,15 @@ pub fn best_index(fitness: &[f64]) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use esrl_agents::{NetConfig, RlConfig};
-    use esrl_sim::Pendulum;
+    use crate::LocalEvaluator;
+    use esrl_agents::{Algo, NetConfig, RlConfig};
+    use esrl_sim::{Env, Pendulum};
 
     fn hybrid(algo: Algo) -> Hybrid {
         let cfg = RlConfig {
             batch_size: 8,
             warm_start: 100,
-            ..RlConfig::default()
+            ..RlConfig::for_algo(algo)
         };
         let agent = Agent::new(algo, 3, 1, &NetConfig::tiny(false), &cfg, 7).unwrap();
         let es = EsConfig {
@@ -408,29 +658,26 @@ mod tests {
             sigma: 0.5,
             ..EsConfig::default()
         };
-        Hybrid::new(agent, es, 3, 7)
+        let make_env: Arc<MakeEnv> = Arc::new(|| Box::new(Pendulum::new()) as Box<dyn Env>);
+        let evaluator = LocalEvaluator::new(make_env, 2).unwrap();
+        Hybrid::new(agent, es, 3, 7, Arc::new(evaluator))
     }
 
     #[test]
     fn rl_actor_is_in_every_population_and_replaced_only_when_beaten() {
-        let make_env = || Box::new(Pendulum::new()) as Box<dyn Env>;
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
         for algo in [Algo::Sac, Algo::Td3, Algo::Ddpg] {
             let mut h = hybrid(algo);
-            h.warm_start(make_env().as_mut());
+            h.warm_start(&mut Pendulum::new());
             let (mut replaced, mut kept) = (0, 0);
             for _ in 0..8 {
                 let population = h.population();
                 assert_eq!(population.len(), 6);
                 assert_eq!(
                     population[0],
-                    h.trainer.agent.genome(),
+                    h.trainer().agent().genome(),
                     "individual 0 is the RL actor"
                 );
-                let r = h.step(&make_env, &pool).unwrap();
+                let r = h.step().unwrap();
                 assert_eq!(
                     r.rl_replaced,
                     r.best_fitness > r.rl_fitness,
@@ -440,13 +687,13 @@ mod tests {
                     replaced += 1;
                     let best = population
                         .iter()
-                        .position(|g| *g == h.kept)
+                        .position(|g| g == h.kept())
                         .expect("the kept genome is a population member's");
                     assert_ne!(best, 0);
                 } else {
                     kept += 1;
                     assert_eq!(r.rl_rank, 0, "not replaced means the RL actor was best");
-                    assert_eq!(h.kept, population[0]);
+                    assert_eq!(h.kept(), population[0]);
                 }
                 assert_eq!(r.curve, r.best_fitness);
             }

@@ -1,11 +1,57 @@
-//! Evolution-strategy population and the hybrid ES-SAC / ES-TD3 / ES-DDPG loop.
+//! The evolution strategy of the paper (§3.2) and the hybrid ES-SAC / ES-TD3 / ES-DDPG loop
+//! (§4–5) around an [`esrl_agents::Agent`].
 //!
-//! [`Strategy`] is the ES of the paper's §3.2 on flat parameter vectors; [`Hybrid`] runs the
-//! paper's §4 loop around an [`esrl_agents::Agent`], evaluating the population in parallel
-//! with bit-identical results at any thread count.
+//! - [`Strategy`] (`strategy.rs`): the ES on flat parameter vectors, eqs. 8–11 — perturb,
+//!   recombine the elites with log-rank weights, decay σ.
+//! - [`Hybrid`] (`hybrid.rs`): one generation as ask/tell. [`Hybrid::ask`] hands out a
+//!   [`Generation`] of [`Genome`]s, each with its seeds; an [`Evaluator`] turns them into
+//!   episodes with the stateless [`rollout_genome`] (`evaluate.rs`), on local threads
+//!   ([`LocalEvaluator`]) or anywhere else; [`Hybrid::tell`] stores the transitions, updates
+//!   the ES, replaces the RL actor when it was beaten and runs the inner training cycles.
+//!   [`Hybrid::step`] does all three. `Hybrid` is an [`esrl_agents::Learner`], so the same
+//!   loop that trains a plain agent drives it.
+//!
+//! Reading ES-SAC top to bottom: `hybrid.rs` (the loop, steps 1–5), `evaluate.rs` (step 2),
+//! `strategy.rs` (step 3), then `esrl_agents`' `train.rs` (the inner cycles) and `update.rs`
+//! (the SAC update, each loss under its equation).
+//!
+//! ```
+//! use esrl_agents::{Agent, Algo, NetConfig, RlConfig};
+//! use esrl_es::{EsConfig, Hybrid, LocalEvaluator};
+//! use esrl_sim::{Env, MakeEnv, Pendulum};
+//! use std::sync::Arc;
+//!
+//! let cfg = RlConfig { batch_size: 8, warm_start: 100, ..RlConfig::for_algo(Algo::Sac) };
+//! let agent = Agent::new(Algo::Sac, 3, 1, &NetConfig::tiny(false), &cfg, 0)?;
+//! let envs: Arc<MakeEnv> = Arc::new(|| Box::new(Pendulum::new()) as Box<dyn Env>);
+//! let evaluator = Arc::new(LocalEvaluator::new(envs, 2).expect("a thread pool"));
+//! let es = EsConfig { population: 4, ..EsConfig::default() };
+//! let mut hybrid = Hybrid::new(agent, es, 5, 0, evaluator);
+//! hybrid.warm_start(&mut Pendulum::new());
+//! let row = hybrid.step()?;
+//! assert_eq!(row.generation, 0);
+//! assert_eq!(hybrid.trainer().agent().updates(), 5);
+//! # Ok::<(), esrl_agents::AgentError>(())
+//! ```
+//!
+//! # Limitations
+//!
+//! - Results are bit-identical for a seed at any thread count and with any evaluator that
+//!   runs [`rollout_genome`] on the genomes it is given; they are not across CPUs whose SIMD
+//!   widths differ (`esrl-nn`'s products) or across versions of the simulator.
+//! - A generation waits for its slowest individual: evaluation and the inner cycles do not
+//!   overlap, and every genome of a generation is rolled out before anything is learned.
+//! - The strategy is isotropic (one σ for every parameter, no covariance), as the paper's;
+//!   σ follows eq. 11's fixed decay rather than adapting to progress.
+//! - Fitness is the mean return of K rollouts (K = 1 by default): noisy for stochastic
+//!   policies, which `es.fitness` lets one trade against the buffer's exploratory data.
 
+pub mod evaluate;
 pub mod hybrid;
 pub mod strategy;
 
-pub use hybrid::{GenerationReport, Hybrid, LoopStats};
+pub use evaluate::{
+    rollout_genome, Evaluation, Evaluator, Generation, Genome, LocalEvaluator, RolloutSpec,
+};
+pub use hybrid::{GenerationReport, Hybrid, HybridState, LoopStats};
 pub use strategy::{elite_weights, rank, ConfigError, EsConfig, Fitness, LoopOrder, Strategy};

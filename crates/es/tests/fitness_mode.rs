@@ -6,32 +6,32 @@
 
 mod common;
 
-use common::{hybrid, make_env, pool};
+use common::hybrid;
 use esrl_agents::rollout::{rollout, Actor};
 use esrl_agents::{ActMode, Algo};
 use esrl_es::{EsConfig, Fitness, Hybrid};
+use esrl_sim::Pendulum;
 use esrl_streams::Stream;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 /// Return of the kept genome acting by tanh μ from generation `gen`'s first initial state.
 fn deterministic_return(h: &Hybrid, gen: u64) -> f64 {
-    let mut policy = h.trainer.agent.policy_from_genome(&h.kept).unwrap();
-    let mut env = make_env();
+    let mut policy = h.trainer().agent().policy_from_genome(h.kept()).unwrap();
+    let mut env = Pendulum::new();
     let mut rng = ChaCha8Rng::seed_from_u64(0);
     let seed = Stream::EvaluationReset {
         generation: gen,
         evaluation: 0,
         evaluations: 1,
     }
-    .seed(h.trainer.seed);
+    .seed(h.trainer().seed());
     rollout(
-        env.as_mut(),
+        &mut env,
         Actor::Policy(&mut policy, ActMode::Deterministic),
         seed,
         None,
         &mut rng,
-        |_| {},
     )
     .ret
 }
@@ -49,12 +49,11 @@ fn with(fitness: Fitness, algo: Algo) -> Hybrid {
 
 #[test]
 fn deterministic_and_both_score_the_tanh_mu_rollout() {
-    let pool = pool(2);
     for fitness in [Fitness::Deterministic, Fitness::Both] {
         let mut h = with(fitness, Algo::Sac);
         for g in 0..3 {
-            let steps = h.trainer.env_steps;
-            let r = h.step(&make_env, &pool).unwrap();
+            let steps = h.trainer().env_steps();
+            let r = h.step().unwrap();
             assert_eq!(r.curve, deterministic_return(&h, g), "{fitness:?} gen {g}");
             let per_individual = if fitness == Fitness::Both { 400 } else { 200 };
             assert_eq!(r.env_steps - steps, 6 * per_individual, "{fitness:?}");
@@ -64,12 +63,11 @@ fn deterministic_and_both_score_the_tanh_mu_rollout() {
 
 #[test]
 fn auto_samples_for_sac_and_is_deterministic_for_td3() {
-    let pool = pool(1);
     let mut sac = with(Fitness::Auto, Algo::Sac);
-    let r = sac.step(&make_env, &pool).unwrap();
+    let r = sac.step().unwrap();
     assert_ne!(r.curve, deterministic_return(&sac, 0), "ES-SAC samples");
     let mut td3 = with(Fitness::Auto, Algo::Td3);
-    let r = td3.step(&make_env, &pool).unwrap();
+    let r = td3.step().unwrap();
     assert_eq!(
         r.curve,
         deterministic_return(&td3, 0),

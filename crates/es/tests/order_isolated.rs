@@ -4,19 +4,18 @@
 
 mod common;
 
-use common::{hybrid, make_env, pool};
+use common::hybrid;
 use esrl_agents::Algo;
 use esrl_es::{EsConfig, GenerationReport, LoopOrder};
 
 fn run(algo: Algo, order: LoopOrder, inner: usize) -> (Vec<GenerationReport>, Vec<f32>) {
-    let pool = pool(2);
     let es = EsConfig {
         order,
         ..EsConfig::default()
     };
     let mut h = hybrid(algo, es, inner);
-    let rows = (0..8).map(|_| h.step(&make_env, &pool).unwrap()).collect();
-    (rows, h.trainer.agent.genome())
+    let rows = (0..8).map(|_| h.step().unwrap()).collect();
+    (rows, h.trainer().agent().genome())
 }
 
 #[test]

@@ -1,5 +1,5 @@
-//! Prints `esrl_nn::bench::run` as one JSON line (what `esrl bench nn --json` prints):
-//! `cargo run --release -p esrl-nn --example nn_bench -- [obs_dim] [reps] [--no-sac]`.
+//! Prints `esrl_nn::bench::run` as one JSON line (the network part of `esrl bench nn
+//! --json`): `cargo run --release -p esrl-nn --example nn_bench -- [obs_dim] [reps]`.
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -10,9 +10,6 @@ fn main() {
     }
     if let Some(&v) = nums.get(1) {
         cfg.reps = v;
-    }
-    if args.iter().any(|a| a == "--no-sac") {
-        cfg.sac_update = false;
     }
     match esrl_nn::bench::run(&cfg) {
         Ok(r) => println!("{}", serde_json::to_string(&r).unwrap_or_default()),

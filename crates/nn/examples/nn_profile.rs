@@ -1,5 +1,6 @@
 //! Loops one forward+backward for profiling:
-//! `cargo run --release -p esrl-nn --example nn_profile -- actor|critic|mlp_actor|mlp_critic|sac|mlp_sac [iters]`.
+//! `cargo run --release -p esrl-nn --example nn_profile -- actor|critic|mlp_actor|mlp_critic [iters]`
+//! (the full SAC update: `cargo run --release -p esrl-agents --example update_profile`).
 
 use esrl_nn::*;
 use rand::SeedableRng;
@@ -8,15 +9,6 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let what = args.next().unwrap_or_else(|| "actor".into());
     let iters: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(50);
-    if what.ends_with("sac") {
-        let cfg = esrl_nn::bench::BenchConfig {
-            obs_dim: 31,
-            ..Default::default()
-        };
-        let ms = esrl_nn::bench::sac_update_loop(&cfg, what == "sac", iters).unwrap();
-        println!("{what}: {ms:.3} ms/update");
-        return;
-    }
     let (b, t, od, ad) = (256, 8, 43, 6);
     let rec = !what.starts_with("mlp");
     let rows = if rec { b * t } else { b };

@@ -15,7 +15,7 @@ cpu=$(( $(nproc) - 1 ))
 for r in $(seq 1 "$rounds"); do
   echo "round $r load $(cut -d' ' -f1-3 /proc/loadavg)"
   t=$(python3 "$here/torch_nn_bench.py" --obs "$obs")
-  e=$(taskset -c "$cpu" target/release/examples/nn_bench "$obs" 21 --no-sac)
+  e=$(taskset -c "$cpu" target/release/examples/nn_bench "$obs" 21)
   echo "$t"
   echo "$e"
   python3 - "$t" "$e" <<'PY'

@@ -1,6 +1,6 @@
 //! Speed of the networks, for `esrl bench nn` and for comparison with PyTorch
-//! (`crates/nn/scripts/torch_nn_bench.py` times the same shapes; `peers/torch_sac_step.py`
-//! the same full SAC update).
+//! (`crates/nn/scripts/torch_nn_bench.py` times the same shapes). The full SAC update that
+//! training runs is timed where it lives, in `esrl_agents::bench` (`esrl bench update`).
 //!
 //! Everything runs on the calling thread (faer `Par::Seq`). Each figure is the median over
 //! `reps` repetitions after `warmup` untimed runs.
@@ -8,7 +8,6 @@
 use crate::error::NnError;
 use crate::graph::Graph;
 use crate::nets::{Actor, ActorConfig, Critic, CriticConfig, Module};
-use crate::optim::{Adam, AdamConfig};
 use crate::tensor::Tensor;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -31,9 +30,6 @@ pub struct BenchConfig {
     pub reps: usize,
     /// Untimed warm-up runs. Default 2.
     pub warmup: usize,
-    /// Also time a whole SAC update (target, twin-critic loss, actor loss through frozen
-    /// critics, α, Polyak), as `peers/torch_sac_step.py` does. Default true.
-    pub sac_update: bool,
 }
 
 impl Default for BenchConfig {
@@ -45,7 +41,6 @@ impl Default for BenchConfig {
             seq_len: 8,
             reps: 7,
             warmup: 2,
-            sac_update: true,
         }
     }
 }
@@ -71,12 +66,8 @@ pub struct BenchReport {
     pub mlp_actor_ms: f64,
     /// Forward + backward of one MLP critic on `batch` transitions.
     pub mlp_critic_ms: f64,
-    /// One full SAC update with the recurrent networks (if measured).
-    pub sac_update_ms: Option<f64>,
-    /// One full SAC update with the MLP networks (if measured).
-    pub mlp_sac_update_ms: Option<f64>,
     /// Fastest repetition of each figure above (ms), keyed like the fields (`actor`,
-    /// `critic`, `mlp_actor`, `mlp_critic`, `sac_update`, `mlp_sac_update`): the least
+    /// `critic`, `mlp_actor`, `mlp_critic`): the least
     /// disturbed by other load on the machine.
     pub min_ms: std::collections::BTreeMap<String, f64>,
     /// Mean time this thread actually ran on a CPU per repetition (ms, Linux
@@ -164,136 +155,14 @@ fn critic_fwd_bwd(critic: &Critic, obs: &Tensor, act: &Tensor, y: &Tensor, batch
     grads.of(critic.params()).map_or(0.0, |v| v[0])
 }
 
-/// The state of a SAC learner, enough to time an update like `peers/torch_sac_step.py`.
-struct Sac {
-    actor: Actor,
-    q1: Critic,
-    q2: Critic,
-    q1_t: Critic,
-    q2_t: Critic,
-    opt_pi: Adam,
-    opt_q1: Adam,
-    opt_q2: Adam,
-    log_alpha: f32,
-    alpha_m: f32,
-    alpha_v: f32,
-    alpha_t: i32,
-    rng: ChaCha8Rng,
-}
-
+/// Random inputs of one timing: observations, actions and regression targets.
 struct Batch {
     obs: Tensor,
     act: Tensor,
     rew: Tensor,
-    next_obs: Tensor,
-    not_done: Tensor,
-    b: usize,
 }
 
-impl Sac {
-    fn new(
-        obs_dim: usize,
-        act_dim: usize,
-        acfg: &ActorConfig,
-        ccfg: &CriticConfig,
-    ) -> Result<Self, NnError> {
-        let actor = Actor::new(obs_dim, act_dim, acfg, 1)?;
-        let q1 = Critic::new(obs_dim, act_dim, ccfg, 2)?;
-        let q2 = Critic::new(obs_dim, act_dim, ccfg, 3)?;
-        let cfg = AdamConfig {
-            lr: 3e-4,
-            l2: 0.0,
-            ..AdamConfig::default()
-        };
-        Ok(Self {
-            opt_pi: Adam::new(cfg.clone(), actor.params())?,
-            opt_q1: Adam::new(cfg.clone(), q1.params())?,
-            opt_q2: Adam::new(cfg, q2.params())?,
-            q1_t: q1.clone(),
-            q2_t: q2.clone(),
-            actor,
-            q1,
-            q2,
-            log_alpha: 0.0,
-            alpha_m: 0.0,
-            alpha_v: 0.0,
-            alpha_t: 0,
-            rng: ChaCha8Rng::seed_from_u64(7),
-        })
-    }
-
-    fn update(&mut self, bt: &Batch) -> Result<(), NnError> {
-        let (gamma, tau, b) = (0.99f32, 0.005f32, bt.b);
-        let alpha = self.log_alpha.exp();
-        let y = {
-            let mut g = Graph::no_grad();
-            let o2 = g.constant(bt.next_obs.clone());
-            let out = self.actor.forward(&mut g, o2, b, None);
-            let s = self.actor.sample(&mut g, &out, &mut self.rng);
-            let qa = self.q1_t.forward(&mut g, o2, s.action, b, None).q;
-            let qb = self.q2_t.forward(&mut g, o2, s.action, b, None).q;
-            let qmin = g.minimum(qa, qb);
-            let lp = g.scale(s.log_prob, alpha);
-            let soft = g.sub(qmin, lp);
-            let nd = g.constant(bt.not_done.clone());
-            let disc = g.mul(soft, nd);
-            let disc = g.scale(disc, gamma);
-            let r = g.constant(bt.rew.clone());
-            let y = g.add(r, disc);
-            g.take_value(y)
-        };
-        let mut grads = {
-            let mut g = Graph::new();
-            let (o, a, yv) = (
-                g.constant(bt.obs.clone()),
-                g.constant(bt.act.clone()),
-                g.constant(y),
-            );
-            let qa = self.q1.forward(&mut g, o, a, b, None).q;
-            let qb = self.q2.forward(&mut g, o, a, b, None).q;
-            let la = g.mse(qa, yv);
-            let lb = g.mse(qb, yv);
-            let loss = g.add(la, lb);
-            g.backward(loss)
-        };
-        self.opt_q1.apply(self.q1.params_mut(), &mut grads)?;
-        self.opt_q2.apply(self.q2.params_mut(), &mut grads)?;
-        let (mut grads, lp_mean) = {
-            let mut g = Graph::new();
-            g.freeze(self.q1.params());
-            g.freeze(self.q2.params());
-            let o = g.constant(bt.obs.clone());
-            let out = self.actor.forward(&mut g, o, b, None);
-            let s = self.actor.sample(&mut g, &out, &mut self.rng);
-            let qa = self.q1.forward(&mut g, o, s.action, b, None).q;
-            let qb = self.q2.forward(&mut g, o, s.action, b, None).q;
-            let qmin = g.minimum(qa, qb);
-            let lp = g.scale(s.log_prob, alpha);
-            let d = g.sub(lp, qmin);
-            let loss = g.mean(d);
-            let lp_mean = g.value(s.log_prob).mean();
-            (g.backward(loss), lp_mean)
-        };
-        self.opt_pi.apply(self.actor.params_mut(), &mut grads)?;
-        // α: L = −log α · (mean log π + H̄); one scalar Adam step.
-        let grad = -(lp_mean - self.actor.act_dim() as f32);
-        self.alpha_t += 1;
-        self.alpha_m = 0.9 * self.alpha_m + 0.1 * grad;
-        self.alpha_v = 0.999 * self.alpha_v + 0.001 * grad * grad;
-        let mh = self.alpha_m / (1.0 - 0.9f32.powi(self.alpha_t));
-        let vh = self.alpha_v / (1.0 - 0.999f32.powi(self.alpha_t));
-        self.log_alpha -= 3e-4 * mh / (vh.sqrt() + 1e-8);
-        self.q1_t
-            .params_mut()
-            .polyak_update(self.q1.params(), tau)?;
-        self.q2_t
-            .params_mut()
-            .polyak_update(self.q2.params(), tau)?;
-        Ok(())
-    }
-}
-
-fn batch(rows: usize, b: usize, obs_dim: usize, act_dim: usize, rng: &mut ChaCha8Rng) -> Batch {
+fn batch(rows: usize, obs_dim: usize, act_dim: usize, rng: &mut ChaCha8Rng) -> Batch {
     Batch {
         obs: randn(rows, obs_dim, rng),
         act: Tensor::from_vec(
@@ -304,15 +173,6 @@ fn batch(rows: usize, b: usize, obs_dim: usize, act_dim: usize, rng: &mut ChaCha
                 .collect(),
         ),
         rew: randn(rows, 1, rng),
-        next_obs: randn(rows, obs_dim, rng),
-        not_done: Tensor::from_vec(
-            rows,
-            1,
-            (0..rows)
-                .map(|_| if rng.random::<f32>() < 0.02 { 0.0 } else { 1.0 })
-                .collect(),
-        ),
-        b,
     }
 }
 
@@ -331,8 +191,8 @@ pub fn run(config: &BenchConfig) -> Result<BenchReport, NnError> {
     let critic = Critic::new(od, ad, &CriticConfig::paper(), 2)?;
     let mlp_actor = Actor::new(od, ad, &ActorConfig::feed_forward(), 3)?;
     let mlp_critic = Critic::new(od, ad, &CriticConfig::feed_forward(), 4)?;
-    let seq = batch(b * t, b, od, ad, &mut rng);
-    let flat = batch(b, b, od, ad, &mut rng);
+    let seq = batch(b * t, od, ad, &mut rng);
+    let flat = batch(b, od, ad, &mut rng);
     let mut sink = 0.0f32;
     let (reps, warm) = (config.reps, config.warmup);
     let mut min_ms = std::collections::BTreeMap::new();
@@ -368,34 +228,6 @@ pub fn run(config: &BenchConfig) -> Result<BenchReport, NnError> {
             sink += critic_fwd_bwd(&mlp_critic, &flat.obs, &flat.act, &flat.rew, b)
         }),
     );
-    let (mut sac_update_ms, mut mlp_sac_update_ms) = (None, None);
-    if config.sac_update {
-        let mut err = Ok(());
-        let mut sac = Sac::new(od, ad, &ActorConfig::paper(), &CriticConfig::paper())?;
-        sac_update_ms = Some(record(
-            "sac_update",
-            time_ms(reps, warm, || {
-                if let Err(e) = sac.update(&seq) {
-                    err = Err(e);
-                }
-            }),
-        ));
-        let mut sac = Sac::new(
-            od,
-            ad,
-            &ActorConfig::feed_forward(),
-            &CriticConfig::feed_forward(),
-        )?;
-        mlp_sac_update_ms = Some(record(
-            "mlp_sac_update",
-            time_ms(reps * 5, warm * 5, || {
-                if let Err(e) = sac.update(&flat) {
-                    err = Err(e);
-                }
-            }),
-        ));
-        err?;
-    }
     std::hint::black_box(sink);
     Ok(BenchReport {
         config: config.clone(),
@@ -407,36 +239,8 @@ pub fn run(config: &BenchConfig) -> Result<BenchReport, NnError> {
         mlp_critic_params: mlp_critic.num_params(),
         mlp_actor_ms,
         mlp_critic_ms,
-        sac_update_ms,
-        mlp_sac_update_ms,
         min_ms,
         cpu_ms,
         threads: 1,
     })
-}
-
-/// Runs `iters` SAC updates of the recurrent (or feed-forward) networks on one fixed batch and
-/// returns the mean wall time in ms (for profiling the full update; not part of the report).
-#[doc(hidden)]
-pub fn sac_update_loop(
-    config: &BenchConfig,
-    recurrent: bool,
-    iters: usize,
-) -> Result<f64, NnError> {
-    let (od, ad, b) = (config.obs_dim, config.act_dim, config.batch);
-    let rows = if recurrent { b * config.seq_len } else { b };
-    let mut rng = ChaCha8Rng::seed_from_u64(0);
-    let data = batch(rows, b, od, ad, &mut rng);
-    let (acfg, ccfg) = if recurrent {
-        (ActorConfig::paper(), CriticConfig::paper())
-    } else {
-        (ActorConfig::feed_forward(), CriticConfig::feed_forward())
-    };
-    let mut sac = Sac::new(od, ad, &acfg, &ccfg)?;
-    sac.update(&data)?;
-    let t0 = Instant::now();
-    for _ in 0..iters {
-        sac.update(&data)?;
-    }
-    Ok(t0.elapsed().as_secs_f64() * 1e3 / iters.max(1) as f64)
 }

@@ -17,106 +17,61 @@
 //! **time-major** order (row `t·B + b`), see [`Tensor`]. Products go through faer,
 //! single-threaded.
 //!
-//! # A SAC update
+//! # The pieces of an update
+//!
+//! A critic regression step, then an actor step through the frozen critic, then Polyak
+//! averaging: the building blocks of SAC, TD3 and DDPG. The one update that training runs,
+//! with burn-in, masks and every loss under its equation, is `esrl_agents::Agent::update`.
 //!
 //! ```
 //! use esrl_nn::*;
 //! use rand::SeedableRng;
 //! use rand_chacha::ChaCha8Rng;
 //!
-//! let (obs_dim, act_dim, b, burn, t) = (5, 2, 4, 2, 3);
+//! let (obs_dim, act_dim, b, t) = (5, 2, 4, 3);
 //! let acfg = ActorConfig { fc: vec![8], lstm_hidden: 6, ..ActorConfig::default() };
 //! let ccfg = CriticConfig { obs_fc: vec![8], act_fc: vec![8], lstm_hidden: 7, ..CriticConfig::default() };
 //! let mut actor = Actor::new(obs_dim, act_dim, &acfg, 1).unwrap();
-//! let mut q1 = Critic::new(obs_dim, act_dim, &ccfg, 2).unwrap();
-//! let mut q2 = Critic::new(obs_dim, act_dim, &ccfg, 3).unwrap();
-//! let (mut q1_t, mut q2_t) = (q1.clone(), q2.clone());
+//! let mut critic = Critic::new(obs_dim, act_dim, &ccfg, 2).unwrap();
+//! let mut target = critic.clone();
 //! let mut opt_pi = Adam::new(AdamConfig::default(), actor.params()).unwrap();
-//! let mut opt_q1 = Adam::new(AdamConfig::default(), q1.params()).unwrap();
-//! let mut opt_q2 = Adam::new(AdamConfig::default(), q2.params()).unwrap();
+//! let mut opt_q = Adam::new(AdamConfig::default(), critic.params()).unwrap();
 //! let mut rng = ChaCha8Rng::seed_from_u64(0);
-//! let (gamma, alpha, tau) = (0.99f32, 0.2f32, 0.005f32);
 //!
-//! // A replay batch, time-major (T·B, ·): a burn-in prefix and the training part.
+//! // B sequences of T steps, time-major (T·B, ·).
 //! let x = |rows: usize, cols: usize, k: f32| {
 //!     Tensor::from_vec(rows, cols, (0..rows * cols).map(|i| ((i as f32 + k) * 0.37).sin()).collect())
 //! };
-//! let (obs_burn, act_burn) = (x(burn * b, obs_dim, 0.0), x(burn * b, act_dim, 1.0));
-//! let (obs, act, next_obs) = (x(t * b, obs_dim, 2.0), x(t * b, act_dim, 3.0), x(t * b, obs_dim, 4.0));
-//! let (reward, not_done) = (x(t * b, 1, 5.0), Tensor::full(t * b, 1, 1.0));
+//! let (obs, act, y) = (x(t * b, obs_dim, 0.0), x(t * b, act_dim, 1.0), x(t * b, 1, 2.0));
 //!
-//! // Burn-in without gradients gives each network its initial (h, c).
-//! let (sa, s1, s2, s1t, s2t) = {
-//!     let mut g = Graph::no_grad();
-//!     let (o, a) = (g.constant(obs_burn), g.constant(act_burn));
-//!     (actor.forward(&mut g, o, b, None).state, q1.forward(&mut g, o, a, b, None).state,
-//!      q2.forward(&mut g, o, a, b, None).state, q1_t.forward(&mut g, o, a, b, None).state,
-//!      q2_t.forward(&mut g, o, a, b, None).state)
-//! };
-//!
-//! // Target y = r + γ(1 − d)(min Q_t(s', a') − α log π(a'|s')), no gradient.
-//! // (The next-observation sequence starts one step after `obs`; reusing the burn-in state
-//! // is the usual approximation.)
-//! let y = {
-//!     let mut g = Graph::no_grad();
-//!     let o2 = g.constant(next_obs);
-//!     let out = actor.forward(&mut g, o2, b, sa.as_ref());
-//!     let s = actor.sample(&mut g, &out, &mut rng);
-//!     let qa = q1_t.forward(&mut g, o2, s.action, b, s1t.as_ref()).q;
-//!     let qb = q2_t.forward(&mut g, o2, s.action, b, s2t.as_ref()).q;
-//!     let qmin = g.minimum(qa, qb);
-//!     let lp = g.scale(s.log_prob, alpha);
-//!     let soft = g.sub(qmin, lp);
-//!     let (r, nd) = (g.constant(reward), g.constant(not_done));
-//!     let disc = g.mul(soft, nd);
-//!     let disc = g.scale(disc, gamma);
-//!     let y = g.add(r, disc);
-//!     g.take_value(y)
-//! };
-//!
-//! // Critic loss: MSE over B·T, gradients into both critics.
+//! // Critic: mean squared error to the targets y, gradients into the critic.
 //! let mut grads = {
 //!     let mut g = Graph::new();
 //!     let (o, a, yv) = (g.constant(obs.clone()), g.constant(act), g.constant(y));
-//!     let qa = q1.forward(&mut g, o, a, b, s1.as_ref()).q;
-//!     let qb = q2.forward(&mut g, o, a, b, s2.as_ref()).q;
-//!     let la = g.mse(qa, yv);
-//!     let lb = g.mse(qb, yv);
-//!     let loss = g.add(la, lb);
+//!     let q = critic.forward(&mut g, o, a, b, None).q;
+//!     let loss = g.mse(q, yv);
 //!     g.backward(loss)
 //! };
-//! opt_q1.apply(q1.params_mut(), &mut grads).unwrap();
-//! opt_q2.apply(q2.params_mut(), &mut grads).unwrap();
+//! opt_q.apply(critic.params_mut(), &mut grads).unwrap();
 //!
-//! // Actor loss mean(α log π − min(Q1, Q2)(s, ã)): the critics are frozen, so the gradient
-//! // flows through their action input into the actor only.
-//! let (mut grads, log_prob) = {
+//! // Actor: maximise Q(s, ã) with ã sampled from the policy; the frozen critic passes the
+//! // gradient through its action input and computes none for its own weights.
+//! let mut grads = {
 //!     let mut g = Graph::new();
-//!     g.freeze(q1.params());
-//!     g.freeze(q2.params());
+//!     g.freeze(critic.params());
 //!     let o = g.constant(obs);
-//!     let out = actor.forward(&mut g, o, b, sa.as_ref());
+//!     let out = actor.forward(&mut g, o, b, None);
 //!     let s = actor.sample(&mut g, &out, &mut rng);
-//!     let qa = q1.forward(&mut g, o, s.action, b, s1.as_ref()).q;
-//!     let qb = q2.forward(&mut g, o, s.action, b, s2.as_ref()).q;
-//!     let qmin = g.minimum(qa, qb);
-//!     let lp = g.scale(s.log_prob, alpha);
-//!     let d = g.sub(lp, qmin);
-//!     let loss = g.mean(d);
-//!     let lp_values = g.value(s.log_prob).clone();
-//!     (g.backward(loss), lp_values)
+//!     let q = critic.forward(&mut g, o, s.action, b, None).q;
+//!     let mean_q = g.mean(q);
+//!     let loss = g.neg(mean_q);
+//!     g.backward(loss)
 //! };
-//! assert!(grads.of(q1.params()).is_none()); // frozen: no critic gradient computed
+//! assert!(grads.of(critic.params()).is_none());
 //! opt_pi.apply(actor.params_mut(), &mut grads).unwrap();
 //!
-//! // Entropy coefficient: L(log α) = −mean(log α · (log π + H̄)), so dL/dlog α = −mean(log π + H̄).
-//! let target_entropy = -(act_dim as f32);
-//! let d_log_alpha = -(log_prob.mean() + target_entropy);
-//! assert!(d_log_alpha.is_finite());
-//!
-//! // Polyak averaging of the targets (eq. 7).
-//! q1_t.params_mut().polyak_update(q1.params(), tau).unwrap();
-//! q2_t.params_mut().polyak_update(q2.params(), tau).unwrap();
+//! // Polyak averaging of the target (eq. 7).
+//! target.params_mut().polyak_update(critic.params(), 0.005).unwrap();
 //! ```
 //!
 //! # Checkpoint tensors
@@ -150,7 +105,7 @@
 //! LSTM's input projection for all T steps is one product, BPTT runs inside one op, the
 //! cell's nonlinearities are vectorised rational/polynomial approximations, and large
 //! buffers are recycled through a per-thread pool so steady-state updates do not fault pages
-//! in. [`bench::run`] measures the paper networks; `scripts/compare.sh` times PyTorch on the
+//! in. [`bench::run`] measures the paper networks' forward and backward passes; `scripts/compare.sh` times PyTorch on the
 //! same shapes in the same session.
 //!
 //! # Limitations

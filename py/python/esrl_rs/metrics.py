@@ -75,6 +75,7 @@ __all__ = [
     "method_target",
     "nauc",
     "percentile",
+    "q0_mean",
     "step_lengths",
     "summarize_method",
     "table1",
@@ -92,6 +93,12 @@ def auc(curve: ArrayLike) -> float:
 def nauc(curve: ArrayLike) -> float:
     """nAUC: AUC divided by the curve's length (average return per generation/episode)."""
     return _m.nauc(curve)
+
+
+def q0_mean(q0: ArrayLike) -> Optional[float]:
+    """Mean Q0 of a run: the mean of the finite values of its ``q0`` column, ``None`` when
+    there are none (the rule of ``summary.json`` and ``esrl compare``)."""
+    return _m.q0_mean(q0)
 
 
 def final_50(curve: ArrayLike) -> float:

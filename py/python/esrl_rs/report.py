@@ -100,15 +100,15 @@ def _ordered(groups: Dict[str, List[Run]]) -> Dict[str, List[Run]]:
 
 
 def _q0_mean(run: Run) -> Optional[float]:
+    """``summary.json``'s ``q0_mean``, or the same rule on the ``q0`` column (runs without a
+    summary): ``esrl_rs.metrics.q0_mean``, one implementation with the CLI's."""
     value = run.summary.get("q0_mean")
     if isinstance(value, (int, float)) and np.isfinite(value):
         return float(value)
     q0 = run.metrics.get("q0")
     if q0 is None:
         return None
-    q0 = np.asarray(q0, dtype=float)
-    q0 = q0[np.isfinite(q0)]
-    return float(q0.mean()) if q0.size else None
+    return metrics.q0_mean(np.asarray(q0, dtype=float))
 
 
 def _seed_gait(run: Run) -> Optional[Dict[str, Any]]:

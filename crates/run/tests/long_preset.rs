@@ -2,21 +2,16 @@
 //! stays up 60 s (`results/experiments/inner1000-s0`): `quick`, the overlay file
 //! `inner_cycles = 1000`, and 895 generations. Only the recorded preset name differs.
 
-use esrl::args::{AgentKind, EnvKind, Preset, TrainOptions};
-use esrl::config::TrainConfig;
+use esrl_run::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
 use std::path::PathBuf;
 
-fn options(preset: Preset, config: Option<PathBuf>, generations: Option<usize>) -> TrainOptions {
-    TrainOptions {
+fn options(preset: Preset, config: Option<PathBuf>, generations: Option<usize>) -> Overrides {
+    Overrides {
         preset,
         config,
-        env: None,
-        urdf: None,
         threads: Some(1),
         generations,
-        episodes: None,
-        steps: None,
-        no_progress: true,
+        ..Overrides::default()
     }
 }
 

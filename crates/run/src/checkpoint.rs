@@ -25,58 +25,45 @@
 //! against the one the checkpoint was trained with: an edited or corrupted checkpoint is
 //! refused with a message naming the file or field, never trusted.
 //!
-//! Hybrid runs also keep `RUN/best/` ([`save_best`]): the policy with the highest
-//! learning-curve value so far, for `esrl eval RUN/best`.
+//! Runs whose learner keeps its scored policy apart from its agent (the hybrid loop) also
+//! keep `RUN/best/` ([`save_best`]): the policy with the highest learning-curve value so
+//! far, for `esrl eval RUN/best`.
+//!
+//! Everything a checkpoint holds comes through the [`Learner`] interface: its counters and
+//! streams ([`Learner::state`], the learner's keys of `state.json` beside the run's own
+//! [`RunState`]), its tensors ([`Learner::tensors`]) and its replay buffer; resuming checks
+//! them ([`Learner::check`]) and hands them back ([`Learner::restore`]) to a learner built
+//! fresh from the run's config.
 //!
 //! A checkpoint is written to `checkpoint.tmp/`, then swapped in with two renames; a kill at
 //! any moment leaves `checkpoint/` or `checkpoint.old/` complete, and loading falls back to the
 //! latter.
 
-use crate::config::TrainConfig;
-use crate::run_dir::RunDir;
-use anyhow::{bail, Context, Result};
-use esrl_agents::{Agent, ReplayBuffer, Trainer};
-use esrl_es::Hybrid;
+use crate::bail;
+use crate::config::{config_differences, TrainConfig};
+use crate::error::{Context, Result};
+use crate::run_dir::{write_atomic, write_json_atomic, RunDir};
+use esrl_agents::{Agent, Learner, LearnerState, ReplayBuffer};
 use esrl_nn::{load_tensors, save_params, save_tensors, Module, NamedTensor};
-use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::collections::{BTreeMap, HashMap};
 use std::fs;
 use std::path::{Path, PathBuf};
 
-/// Counters and random streams of a checkpoint (`state.json`).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct CheckpointState {
-    /// Format version.
+/// Version of `state.json` written now. Version 2 (issue 18) marks DDPG checkpoints whose
+/// config's `rl.policy_delay` and `rl.target_noise` were honoured; version 1 DDPG ignored them
+/// ([`legacy_ddpg_settings`]).
+pub const STATE_VERSION: u32 = 2;
+
+/// The run's own part of `state.json`: how far it is, and the replay chunks its buffer is
+/// made of. The learner's counters and streams ([`Learner::State`]) are the file's other keys.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunState {
+    /// Format version ([`STATE_VERSION`]).
     pub version: u32,
     /// Metric rows covered (rows past this are dropped on resume).
     pub rows: usize,
-    /// Episodes (plain) completed.
-    pub episodes: usize,
-    /// Generations (hybrid) completed.
-    pub generations: usize,
-    /// Environment steps taken.
-    pub env_steps: u64,
-    /// The trainer's random stream.
-    pub trainer_rng: ChaCha8Rng,
-    /// Gradient updates done.
-    pub agent_updates: u64,
-    /// The agent's random stream.
-    pub agent_rng: ChaCha8Rng,
-    /// Whether the replay buffer's last episode is still open.
-    pub episode_open: bool,
-    /// ES σ (hybrid).
-    pub sigma: Option<f64>,
-    /// ES generation counter (hybrid).
-    pub es_generation: Option<u64>,
-    /// Whether the RL actor carries inner updates not yet evaluated (hybrid). Absent in
-    /// checkpoints written before this field existed: then true after generation 0.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rl_trained: Option<bool>,
-    /// The hybrid loop's counts so far (hybrid; absent in older checkpoints).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub loop_stats: Option<esrl_es::LoopStats>,
     /// Wall-clock seconds of training so far.
     pub wall_s: f64,
     /// The learning curve so far.
@@ -89,29 +76,27 @@ pub struct CheckpointState {
     pub replay: Option<ReplayLog>,
 }
 
-impl CheckpointState {
-    /// The state of a run that has not started: counters at zero, the learner's streams.
-    pub fn fresh(learner: &Learner) -> Self {
+impl RunState {
+    /// A run that has not started.
+    pub fn fresh() -> Self {
         Self {
-            version: 1,
+            version: STATE_VERSION,
             rows: 0,
-            episodes: 0,
-            generations: 0,
-            env_steps: 0,
-            trainer_rng: learner.trainer().rng.clone(),
-            agent_updates: 0,
-            agent_rng: learner.trainer().agent.counters().1,
-            episode_open: false,
-            sigma: None,
-            es_generation: None,
-            rl_trained: None,
-            loop_stats: None,
             wall_s: 0.0,
             curve: Vec::new(),
             q0: Vec::new(),
             replay: None,
         }
     }
+}
+
+/// `state.json` as written: the run's keys, then the learner's.
+#[derive(Serialize)]
+struct StateFile<'a, S: Serialize> {
+    #[serde(flatten)]
+    run: &'a RunState,
+    #[serde(flatten)]
+    learner: &'a S,
 }
 
 /// The replay buffer of a checkpoint as chunks in `RUN/replay/`.
@@ -159,32 +144,6 @@ const MANIFEST_FILES: [&str; 4] = [
     "config.toml",
 ];
 
-/// The training state a checkpoint holds: a plain trainer or a hybrid one.
-pub enum Learner {
-    /// SAC / TD3 / DDPG.
-    Plain(Box<Trainer>),
-    /// ES-SAC / ES-TD3 / ES-DDPG.
-    Hybrid(Box<Hybrid>),
-}
-
-impl Learner {
-    /// The RL trainer inside.
-    pub fn trainer(&self) -> &Trainer {
-        match self {
-            Learner::Plain(t) => t,
-            Learner::Hybrid(h) => &h.trainer,
-        }
-    }
-
-    /// The RL trainer inside, mutable.
-    pub fn trainer_mut(&mut self) -> &mut Trainer {
-        match self {
-            Learner::Plain(t) => t,
-            Learner::Hybrid(h) => &mut h.trainer,
-        }
-    }
-}
-
 /// Where the newest complete checkpoint of a run folder is, if any.
 pub fn find(run: &Path) -> Option<PathBuf> {
     ["checkpoint", "checkpoint.old"]
@@ -196,31 +155,27 @@ pub fn find(run: &Path) -> Option<PathBuf> {
 /// Writes a checkpoint of `learner` into `run/checkpoint/` atomically: the new replay chunk
 /// first, then the checkpoint folder (manifest last), swapped in with renames; chunks no
 /// longer needed are deleted only once the new checkpoint is in place.
-pub fn save(
+pub fn save<L: Learner>(
     run: &Path,
     cfg: &TrainConfig,
-    learner: &Learner,
-    state: &mut CheckpointState,
+    learner: &L,
+    state: &mut RunState,
 ) -> Result<()> {
-    let trainer = learner.trainer();
-    state.replay = Some(append_replay(run, &trainer.buffer, state.replay.take())?);
+    state.version = STATE_VERSION;
+    state.replay = Some(append_replay(run, learner.buffer(), state.replay.take())?);
     let tmp = fresh_dir(&run.join("checkpoint.tmp"))?;
-    let es_mean = match learner {
-        Learner::Hybrid(h) => Some(NamedTensor {
-            name: "es.mean".into(),
-            shape: vec![h.strategy.mean.len()],
-            data: h.strategy.mean.clone(),
-        }),
-        Learner::Plain(_) => None,
+    write_agent(&tmp, learner.tensors(), learner.agent())?;
+    let file = StateFile {
+        run: state,
+        learner: &learner.state(),
     };
-    write_agent(&tmp, &trainer.agent, es_mean)?;
-    crate::run_dir::write_json_atomic(&tmp.join("state.json"), state)?;
-    crate::run_dir::write_atomic(&tmp.join("config.toml"), cfg.to_toml()?.as_bytes())?;
+    write_json_atomic(&tmp.join("state.json"), &file)?;
+    write_atomic(&tmp.join("config.toml"), cfg.to_toml()?.as_bytes())?;
     let mut sha256 = BTreeMap::new();
     for name in MANIFEST_FILES {
         sha256.insert(name.to_string(), sha256_file(&tmp.join(name))?);
     }
-    crate::run_dir::write_json_atomic(&tmp.join("manifest.json"), &Manifest { sha256 })?;
+    write_json_atomic(&tmp.join("manifest.json"), &Manifest { sha256 })?;
     swap_in(&tmp, &run.join("checkpoint"), &run.join("checkpoint.old"))?;
     prune_replay(run, state.replay.as_ref())
 }
@@ -282,18 +237,16 @@ fn fresh_dir(dir: &Path) -> Result<PathBuf> {
     Ok(dir.to_path_buf())
 }
 
-/// Writes `agent.safetensors` (the agent's state tensors, plus `extra`) and
-/// `actor.safetensors` (the actor alone) into `dir`.
-fn write_agent(dir: &Path, agent: &Agent, extra: Option<NamedTensor>) -> Result<()> {
-    let tensors: Vec<NamedTensor> = agent
-        .state_tensors()
+/// Writes `agent.safetensors` (`tensors`) and `actor.safetensors` (`agent`'s actor alone,
+/// under the tensor names of esrl-nn) into `dir`.
+fn write_agent(dir: &Path, tensors: Vec<(String, Vec<f32>)>, agent: &Agent) -> Result<()> {
+    let tensors: Vec<NamedTensor> = tensors
         .into_iter()
         .map(|(name, data)| NamedTensor {
             shape: vec![data.len()],
             name,
             data,
         })
-        .chain(extra)
         .collect();
     save_tensors(&dir.join("agent.safetensors"), &tensors, None)?;
     save_params(
@@ -319,7 +272,7 @@ fn swap_in(tmp: &Path, current: &Path, old: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Where a hybrid run's best policy so far is kept (see [`save_best`]).
+/// Where a run's best policy so far is kept (see [`save_best`]).
 pub const BEST: &str = "best";
 
 /// What `RUN/best/best.json` says about the policy in `RUN/best/`.
@@ -333,20 +286,16 @@ pub struct BestInfo {
     pub env_steps: u64,
 }
 
-/// Writes `RUN/best/`: the hybrid run's agent with the actor (and, for ES-SAC, log α) of the
-/// generation's best individual ([`Hybrid::kept`]), i.e. the policy that scored the highest
-/// learning-curve value so far. `esrl eval RUN/best` evaluates it.
+/// Writes `RUN/best/`: `agent`, the agent whose policy scored the highest learning-curve
+/// value so far ([`Learner::scored_agent`]: for the hybrid loop, the RL agent with the actor
+/// and log α of that generation's best individual). `esrl eval RUN/best` evaluates it.
 ///
 /// Same layout as a checkpoint less the replay buffer and `state.json`, written to
 /// `best.tmp/` and swapped in like one. It is not a point to resume from.
-pub fn save_best(run: &Path, hybrid: &Hybrid, info: &BestInfo) -> Result<()> {
+pub fn save_best(run: &Path, agent: &Agent, info: &BestInfo) -> Result<()> {
     let tmp = fresh_dir(&run.join("best.tmp"))?;
-    let mut agent = hybrid.trainer.agent.clone();
-    agent
-        .set_genome(&hybrid.kept)
-        .context("taking the best individual's genome")?;
-    write_agent(&tmp, &agent, None)?;
-    crate::run_dir::write_json_atomic(&tmp.join("best.json"), info)?;
+    write_agent(&tmp, agent.state_tensors(), agent)?;
+    write_json_atomic(&tmp.join("best.json"), info)?;
     swap_in(&tmp, &run.join(BEST), &run.join("best.old"))
 }
 
@@ -380,7 +329,8 @@ fn verify_manifest(dir: &Path) -> Result<()> {
         }
         if sha256_file(&file)? != *want {
             bail!(
-                "{} does not match its SHA-256 in {}: it was modified or corrupted after the                  checkpoint was written. Restore it, or start a new run",
+                "{} does not match its SHA-256 in {}: it was modified or corrupted after the \
+                 checkpoint was written. Restore it, or start a new run",
                 file.display(),
                 p.display()
             );
@@ -389,15 +339,45 @@ fn verify_manifest(dir: &Path) -> Result<()> {
     Ok(())
 }
 
+/// DDPG checkpoints before [`STATE_VERSION`] 2 were trained while DDPG ignored
+/// `rl.policy_delay` and `rl.target_noise` (TD3's tricks, which their config.toml still lists
+/// at TD3's 2 and 0.2): it trained as if they were 1 and 0. Sets them so, for a DDPG-family
+/// `cfg`, and says whether anything changed.
+pub fn legacy_ddpg_settings(cfg: &mut TrainConfig) -> bool {
+    if cfg.agent.algo() != esrl_agents::Algo::Ddpg {
+        return false;
+    }
+    let before = (cfg.rl.policy_delay, cfg.rl.target_noise);
+    cfg.rl.policy_delay = 1;
+    cfg.rl.target_noise = 0.0;
+    before != (1, 0.0)
+}
+
+/// A run folder's configuration as it trains: its `config.toml`, with the settings its
+/// newest checkpoint was trained with where the meaning of a key changed since
+/// ([`legacy_ddpg_settings`]). Returns the config and whether it differs from the file.
+pub fn run_config(run: &Path) -> Result<(TrainConfig, bool)> {
+    let mut cfg = TrainConfig::load(&run.join(RunDir::CONFIG))?;
+    let legacy = match find(run) {
+        Some(dir) => read_run_state(&dir)?.version < 2,
+        None => false,
+    };
+    let changed = legacy && legacy_ddpg_settings(&mut cfg);
+    Ok((cfg, changed))
+}
+
 /// Refuses to resume when the run's configuration changed since the checkpoint was written,
 /// naming what changed. Budget keys (`generations`, `episodes`, `max_env_steps`), `threads`
 /// and `checkpoint_every` may change.
-pub fn check_config(dir: &Path, cfg: &TrainConfig) -> Result<()> {
+pub fn check_config(dir: &Path, state: &RunState, cfg: &TrainConfig) -> Result<()> {
     let p = dir.join("config.toml");
     if !p.exists() {
         return Ok(());
     }
-    let stored = TrainConfig::load(&p)?;
+    let mut stored = TrainConfig::load(&p)?;
+    if state.version < 2 {
+        legacy_ddpg_settings(&mut stored);
+    }
     let free = [
         "generations",
         "episodes",
@@ -405,13 +385,16 @@ pub fn check_config(dir: &Path, cfg: &TrainConfig) -> Result<()> {
         "threads",
         "checkpoint_every",
     ];
-    let diff: Vec<String> = crate::compare::config_differences(&stored, cfg)?
+    let diff: Vec<String> = config_differences(&stored, cfg)?
         .into_iter()
         .filter(|d| !free.iter().any(|k| d.starts_with(&format!("{k}:"))))
         .collect();
     if !diff.is_empty() {
         bail!(
-            "the run's config.toml differs from the configuration its checkpoint was trained              with ({}; checkpoint vs config.toml). A resumed run keeps its settings (only the              budget and threads may change): restore the settings from {}, or start a new run              with --config and another --out",
+            "the run's config.toml differs from the configuration its checkpoint was trained \
+             with ({}; checkpoint vs config.toml). A resumed run keeps its settings (only the \
+             budget and threads may change): restore the settings from {}, or start a new run \
+             with --config and another --out",
             diff.join(", "),
             p.display()
         );
@@ -419,13 +402,15 @@ pub fn check_config(dir: &Path, cfg: &TrainConfig) -> Result<()> {
     Ok(())
 }
 
-/// Checks `state.json` against the configuration's rules and the run's metric log, before
-/// anything is truncated: an inconsistent state is refused, naming the field.
-pub fn check_state(
+/// Checks `state.json` against the learner built from the run's configuration and the
+/// run's metric log, before anything is truncated: an inconsistent state is refused, naming
+/// the field.
+pub fn check_state<L: Learner>(
     run: &Path,
     dir: &Path,
-    state: &CheckpointState,
-    cfg: &TrainConfig,
+    learner: &L,
+    state: &RunState,
+    learner_state: &L::State,
 ) -> Result<()> {
     let p = dir.join("state.json");
     let bad = |field: &str, why: String| -> Result<()> {
@@ -450,50 +435,19 @@ pub fn check_state(
             format!("has {} values for {} rows", state.q0.len(), state.rows),
         );
     }
-    let counted = if cfg.agent.is_hybrid() {
-        state.generations
-    } else {
-        state.episodes
-    };
-    if counted != state.rows {
-        let field = if cfg.agent.is_hybrid() {
-            "generations"
-        } else {
-            "episodes"
-        };
-        return bad(field, format!("= {counted} but rows = {}", state.rows));
+    if let Err(esrl_agents::AgentError::State { field, reason }) =
+        learner.check(learner_state, state.rows)
+    {
+        return bad(&field, reason);
     }
-    if cfg.agent.is_hybrid() {
-        let Some(sigma) = state.sigma else {
-            return bad("sigma", "is missing for an ES run".into());
-        };
-        let (lo, hi) = (
-            cfg.es.sigma.min(cfg.es.sigma_min),
-            cfg.es.sigma.max(cfg.es.sigma_min),
-        );
-        if !(sigma.is_finite() && sigma >= lo * (1.0 - 1e-9) && sigma <= hi * (1.0 + 1e-9)) {
-            return bad(
-                "sigma",
-                format!("= {sigma}, outside [{lo}, {hi}] where eq. 11 keeps it"),
-            );
-        }
-        if state.es_generation != Some(state.generations as u64) {
-            return bad(
-                "es_generation",
-                format!(
-                    "= {:?} but generations = {}",
-                    state.es_generation, state.generations
-                ),
-            );
-        }
-    }
+    let env_steps = learner_state.env_steps();
     if let Some(log) = &state.replay {
-        if log.pushed != state.env_steps {
+        if log.pushed != env_steps {
             return bad(
                 "env_steps",
                 format!(
-                    "= {} but the replay log holds {} pushes",
-                    state.env_steps, log.pushed
+                    "= {env_steps} but the replay log holds {} pushes",
+                    log.pushed
                 ),
             );
         }
@@ -504,7 +458,8 @@ pub fn check_state(
             .with_context(|| format!("reading {}", metrics.display()))?;
         let Some(line) = text.lines().nth(state.rows - 1) else {
             bail!(
-                "{} has {} rows but the checkpoint says {}: the metrics were cut or the state                  was edited",
+                "{} has {} rows but the checkpoint says {}: the metrics were cut or the state \
+                 was edited",
                 metrics.display(),
                 text.lines().count(),
                 state.rows
@@ -512,12 +467,11 @@ pub fn check_state(
         };
         let row: serde_json::Value = serde_json::from_str(line)
             .with_context(|| format!("parsing row {} of {}", state.rows, metrics.display()))?;
-        if row["env_steps"].as_u64() != Some(state.env_steps) {
+        if row["env_steps"].as_u64() != Some(env_steps) {
             return bad(
                 "env_steps",
                 format!(
-                    "= {} but row {} of {} says {}",
-                    state.env_steps,
+                    "= {env_steps} but row {} of {} says {}",
                     state.rows,
                     metrics.display(),
                     row["env_steps"]
@@ -528,25 +482,35 @@ pub fn check_state(
     Ok(())
 }
 
-/// Reads `state.json` of a checkpoint folder, after checking the folder against its manifest.
-pub fn load_state(dir: &Path) -> Result<CheckpointState> {
+/// Reads the run's part of a checkpoint's `state.json` (no manifest check).
+fn read_run_state(dir: &Path) -> Result<RunState> {
+    let p = dir.join("state.json");
+    let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))
+}
+
+/// Reads `state.json` of a checkpoint folder, after checking the folder against its
+/// manifest: the run's part and the learner's.
+pub fn load_state<S: LearnerState>(dir: &Path) -> Result<(RunState, S)> {
     verify_manifest(dir)?;
     let p = dir.join("state.json");
     let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-    let state: CheckpointState =
+    let state: RunState =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
-    if state.version != 1 {
+    if !(1..=STATE_VERSION).contains(&state.version) {
         bail!(
             "{}: unsupported checkpoint version {}",
             p.display(),
             state.version
         );
     }
-    Ok(state)
+    let learner: S =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
+    Ok((state, learner))
 }
 
-/// Loads the agent tensors of a checkpoint folder into `agent` (same architecture).
-pub fn load_agent(dir: &Path, agent: &mut Agent) -> Result<HashMap<String, Vec<f32>>> {
+/// The tensors of a checkpoint folder's `agent.safetensors`, refused when any is not finite.
+pub fn read_tensors(dir: &Path) -> Result<HashMap<String, Vec<f32>>> {
     let p = dir.join("agent.safetensors");
     let tensors: HashMap<String, Vec<f32>> = load_tensors(&p)
         .with_context(|| format!("reading {}", p.display()))?
@@ -558,36 +522,37 @@ pub fn load_agent(dir: &Path, agent: &mut Agent) -> Result<HashMap<String, Vec<f
     for name in names {
         if tensors[name].iter().any(|x| !x.is_finite()) {
             bail!(
-                "{}: tensor `{name}` holds non-finite values (NaN or ±inf); these weights                  cannot be evaluated or trained (the run diverged before this checkpoint?)",
+                "{}: tensor `{name}` holds non-finite values (NaN or ±inf); these weights \
+                 cannot be evaluated or trained (the run diverged before this checkpoint?)",
                 p.display()
             );
         }
     }
-    agent.load_state_tensors(&tensors).with_context(|| {
-        format!(
-            "loading {} (does config.toml match the checkpoint?)",
-            p.display()
-        )
-    })?;
     Ok(tensors)
 }
 
-/// Restores `learner` (built fresh from the run's config) from a checkpoint folder.
-pub fn restore(dir: &Path, learner: &mut Learner, state: &CheckpointState) -> Result<()> {
-    let tensors = {
-        let trainer = learner.trainer_mut();
-        load_agent(dir, &mut trainer.agent)?
-    };
-    let trainer = learner.trainer_mut();
-    trainer
-        .agent
-        .set_counters(state.agent_updates, state.agent_rng.clone());
-    trainer.rng = state.trainer_rng.clone();
-    trainer.env_steps = state.env_steps;
-    trainer.episodes = state.episodes;
-    let cfg = trainer.agent.config().clone();
-    let (obs_dim, act_dim) = (trainer.agent.obs_dim(), trainer.agent.act_dim());
-    trainer.buffer = match &state.replay {
+/// Loads the agent tensors of a checkpoint folder into `agent` (same architecture).
+pub fn load_agent(dir: &Path, agent: &mut Agent) -> Result<()> {
+    let tensors = read_tensors(dir)?;
+    agent.load_state_tensors(&tensors).with_context(|| {
+        format!(
+            "loading {} (does config.toml match the checkpoint?)",
+            dir.join("agent.safetensors").display()
+        )
+    })
+}
+
+/// The replay buffer of a checkpoint: its chunks in `RUN/replay/`, each checked against its
+/// hash (or the `replay.safetensors` of checkpoints before chunks).
+fn read_buffer(
+    dir: &Path,
+    state: &RunState,
+    agent: &Agent,
+    episode_open: bool,
+) -> Result<ReplayBuffer> {
+    let (obs_dim, act_dim) = (agent.obs_dim(), agent.act_dim());
+    let capacity = agent.config().buffer_size;
+    match &state.replay {
         Some(log) => {
             let run = dir.parent().unwrap_or(Path::new("."));
             let paths: Vec<PathBuf> = log
@@ -611,44 +576,36 @@ pub fn restore(dir: &Path, learner: &mut Learner, state: &CheckpointState) -> Re
                 }
             }
             let refs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
-            ReplayBuffer::load_chunks(
-                &refs,
-                obs_dim,
-                act_dim,
-                cfg.buffer_size,
-                state.episode_open,
-                log.pushed,
-            )
+            ReplayBuffer::load_chunks(&refs, obs_dim, act_dim, capacity, episode_open, log.pushed)
         }
         None => ReplayBuffer::load(
             &dir.join("replay.safetensors"),
             obs_dim,
             act_dim,
-            cfg.buffer_size,
-            state.episode_open,
+            capacity,
+            episode_open,
         ),
     }
-    .with_context(|| format!("loading the replay buffer of {}", dir.display()))?;
-    if let Learner::Hybrid(h) = learner {
-        let mean = tensors
-            .get("es.mean")
-            .with_context(|| format!("{}: no es.mean tensor", dir.display()))?;
-        if mean.len() != h.strategy.mean.len() {
-            bail!(
-                "{}: es.mean has {} values, expected {}",
-                dir.display(),
-                mean.len(),
-                h.strategy.mean.len()
-            );
-        }
-        h.strategy.mean = mean.clone();
-        h.strategy.sigma = state.sigma.unwrap_or(h.strategy.sigma);
-        h.strategy.generation = state.es_generation.unwrap_or(0);
-        h.generation = state.generations;
-        h.rl_trained = state
-            .rl_trained
-            .unwrap_or(h.generation > 0 && h.inner_cycles > 0);
-        h.stats = state.loop_stats.clone().unwrap_or_default();
-    }
-    Ok(())
+    .with_context(|| format!("loading the replay buffer of {}", dir.display()))
+}
+
+/// Restores `learner` (built fresh from the run's config) from a checkpoint folder: its
+/// tensors, its replay buffer and its counters.
+pub fn restore<L: Learner>(
+    dir: &Path,
+    learner: &mut L,
+    state: &RunState,
+    learner_state: L::State,
+) -> Result<()> {
+    let tensors = read_tensors(dir)?;
+    let buffer = read_buffer(dir, state, learner.agent(), learner_state.episode_open())?;
+    let p = dir.join("agent.safetensors");
+    learner
+        .restore(learner_state, &tensors, buffer)
+        .with_context(|| {
+            format!(
+                "loading {} (does config.toml match the checkpoint?)",
+                p.display()
+            )
+        })
 }

@@ -1,15 +1,155 @@
-//! The resolved training configuration: preset, then a TOML file, then command-line flags.
+//! The resolved training configuration: preset, then a TOML file, then command-line flags
+//! ([`Overrides`]).
 //!
 //! The run folder's `config.toml` is this struct serialised, so a run can be repeated with
 //! `esrl train <agent> --config RUN/config.toml`. Unknown keys are refused with their name.
 
-use crate::args::{AgentKind, EnvKind, Preset, TrainOptions};
-use anyhow::{bail, Context, Result};
-use esrl_agents::{LearnEvery, NetConfig, RlConfig};
+use crate::bail;
+use crate::error::{Context, Result};
+use esrl_agents::{Algo, LearnEvery, NetConfig, RlConfig};
 use esrl_es::EsConfig;
 use esrl_sim::WalkConfig;
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// The six agents.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum AgentKind {
+    /// Hybrid evolution strategy + SAC (the paper's method).
+    EsSac,
+    /// Hybrid evolution strategy + TD3.
+    EsTd3,
+    /// Hybrid evolution strategy + DDPG.
+    EsDdpg,
+    /// Soft actor-critic.
+    Sac,
+    /// Twin delayed DDPG.
+    Td3,
+    /// Deep deterministic policy gradient.
+    Ddpg,
+}
+
+impl AgentKind {
+    /// All six, in the paper's Table 1 order.
+    pub const ALL: [AgentKind; 6] = [
+        AgentKind::EsSac,
+        AgentKind::EsTd3,
+        AgentKind::EsDdpg,
+        AgentKind::Sac,
+        AgentKind::Td3,
+        AgentKind::Ddpg,
+    ];
+
+    /// The name used on the command line and in files (`es-sac`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            AgentKind::EsSac => "es-sac",
+            AgentKind::EsTd3 => "es-td3",
+            AgentKind::EsDdpg => "es-ddpg",
+            AgentKind::Sac => "sac",
+            AgentKind::Td3 => "td3",
+            AgentKind::Ddpg => "ddpg",
+        }
+    }
+
+    /// Whether the agent runs ES generations (true) or plain episodes (false).
+    pub fn is_hybrid(self) -> bool {
+        matches!(
+            self,
+            AgentKind::EsSac | AgentKind::EsTd3 | AgentKind::EsDdpg
+        )
+    }
+
+    /// Parses a name as written on the command line.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|a| a.name() == name.trim())
+    }
+}
+
+/// Which environment to train on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum EnvKind {
+    /// The humanoid on the 50 m track (the paper's task).
+    Walk,
+    /// Gymnasium's Pendulum-v1: a fast sanity task.
+    Pendulum,
+}
+
+/// Named sets of settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Preset {
+    /// The paper's numbers: N = 25, σ = 0.25, 50 inner cycles, 1500 generations/episodes.
+    #[default]
+    Paper,
+    /// Visible learning on a 2-core machine in about 30 minutes.
+    Quick,
+    /// `quick` with 5× the gradient updates per generation and 895 generations: the ES-SAC
+    /// run (seed 0) that stays up 60 s, about 75 minutes on one core.
+    Long,
+    /// Seconds: tiny budget and networks, for tests.
+    Smoke,
+}
+
+impl EnvKind {
+    /// The name used on the command line and in files (`walk`, `pendulum`).
+    pub fn name(self) -> &'static str {
+        match self {
+            EnvKind::Walk => "walk",
+            EnvKind::Pendulum => "pendulum",
+        }
+    }
+}
+
+impl Preset {
+    /// The name used on the command line and in `config.toml` (`paper`, `quick`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Paper => "paper",
+            Preset::Quick => "quick",
+            Preset::Long => "long",
+            Preset::Smoke => "smoke",
+        }
+    }
+}
+
+impl AgentKind {
+    /// The RL algorithm behind the agent.
+    pub fn algo(self) -> Algo {
+        match self {
+            AgentKind::EsSac | AgentKind::Sac => Algo::Sac,
+            AgentKind::EsTd3 | AgentKind::Td3 => Algo::Td3,
+            AgentKind::EsDdpg | AgentKind::Ddpg => Algo::Ddpg,
+        }
+    }
+}
+
+/// What a user sets on top of a preset: a TOML file, then single settings (the flags of
+/// `esrl train`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overrides {
+    /// The preset underneath. Default `paper`.
+    pub preset: Preset,
+    /// TOML file laid over the preset (any subset of `config.toml`'s keys).
+    pub config: Option<PathBuf>,
+    /// Environment (default: walk, or the file's).
+    pub env: Option<EnvKind>,
+    /// A URDF instead of the embedded humanoid.
+    pub urdf: Option<PathBuf>,
+    /// Rollout threads.
+    pub threads: Option<usize>,
+    /// ES generations.
+    pub generations: Option<usize>,
+    /// Plain training episodes.
+    pub episodes: Option<usize>,
+    /// Environment-step budget.
+    pub steps: Option<u64>,
+}
 
 /// Everything a training run depends on.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -61,7 +201,7 @@ impl TrainConfig {
             checkpoint_every: 10,
             walk: WalkConfig::default(),
             network: NetConfig::default(),
-            rl: RlConfig::default(),
+            rl: RlConfig::for_algo(agent.algo()),
             es: EsConfig::default(),
         };
         if env == EnvKind::Walk && !agent.is_hybrid() {
@@ -138,7 +278,7 @@ impl TrainConfig {
     }
 
     /// Resolves preset, file and flags, in that order, and validates the result.
-    pub fn resolve(agent: AgentKind, opts: &TrainOptions, seed: Option<u64>) -> Result<Self> {
+    pub fn resolve(agent: AgentKind, opts: &Overrides, seed: Option<u64>) -> Result<Self> {
         let env = opts.env.unwrap_or(EnvKind::Walk);
         let mut cfg = Self::preset(agent, env, opts.preset);
         if let Some(path) = &opts.config {
@@ -374,4 +514,42 @@ fn merge(base: &mut toml::Table, over: toml::Table) {
             }
         }
     }
+}
+
+/// Paths (dotted) where two configs differ, the thread count excepted, as
+/// `key: stored vs wanted`.
+pub fn config_differences(stored: &TrainConfig, wanted: &TrainConfig) -> Result<Vec<String>> {
+    fn walk(a: &toml::Value, b: &toml::Value, path: &str, out: &mut Vec<String>) {
+        match (a, b) {
+            (toml::Value::Table(x), toml::Value::Table(y)) => {
+                let mut keys: Vec<&String> = x.keys().chain(y.keys()).collect();
+                keys.sort();
+                keys.dedup();
+                for k in keys {
+                    let p = if path.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{path}.{k}")
+                    };
+                    match (x.get(k), y.get(k)) {
+                        (Some(va), Some(vb)) => walk(va, vb, &p, out),
+                        (va, vb) => out.push(format!(
+                            "{p}: {} vs {}",
+                            va.map_or("none".into(), ToString::to_string),
+                            vb.map_or("none".into(), ToString::to_string)
+                        )),
+                    }
+                }
+            }
+            _ if a != b => out.push(format!("{path}: {a} vs {b}")),
+            _ => {}
+        }
+    }
+    let mut a = toml::Table::try_from(stored)?;
+    let mut b = toml::Table::try_from(wanted)?;
+    a.remove("threads");
+    b.remove("threads");
+    let mut out = Vec::new();
+    walk(&toml::Value::Table(a), &toml::Value::Table(b), "", &mut out);
+    Ok(out)
 }

@@ -2,7 +2,7 @@
 //! default walking environment, collapses: the episode terminates early with a fall, the gait
 //! metrics report `fell` and no track time, and no torque was applied.
 
-use esrl::eval::walk_episode;
+use esrl_eval::walk_episode;
 use esrl_sim::{Env, WalkConfig, WalkEnv};
 
 #[test]

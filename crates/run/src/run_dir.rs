@@ -14,7 +14,8 @@
 //! flushed row by row; on resume they are cut back to the rows the checkpoint knew about, so a
 //! resumed run's logs equal those of an uninterrupted run.
 
-use anyhow::{Context, Result};
+use crate::bail;
+use crate::error::{Context, Result};
 use serde::Serialize;
 use serde_json::{Map, Value};
 use std::fs::{self, File, OpenOptions};
@@ -77,7 +78,7 @@ impl RunDir {
             } else {
                 "starts it over (it stopped before its first checkpoint)"
             };
-            anyhow::bail!(
+            bail!(
                 "{} already holds a run; `--resume {}` instead of `--out` {how}, or choose \
                  another --out",
                 root.display(),
@@ -105,7 +106,7 @@ impl RunDir {
             Vec::new()
         };
         if kept.len() < rows {
-            anyhow::bail!(
+            bail!(
                 "{} has {} rows but the checkpoint expects {rows}",
                 jsonl_path.display(),
                 kept.len()
@@ -173,7 +174,7 @@ impl RunDir {
     /// Appends one metrics row (a serialisable struct with flat fields) to both logs.
     pub fn append<T: Serialize>(&mut self, row: &T) -> Result<()> {
         let Value::Object(map) = serde_json::to_value(row)? else {
-            anyhow::bail!("a metrics row must serialise to a JSON object");
+            bail!("a metrics row must serialise to a JSON object");
         };
         let line = serde_json::to_string(&map)?;
         writeln!(self.jsonl, "{line}")?;

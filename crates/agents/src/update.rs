@@ -1,0 +1,389 @@
+//! The one gradient update of SAC, TD3 and DDPG ([`Agent::update`]): training and every
+//! benchmark run this code. What differs between the algorithms was resolved when the agent
+//! was built (`Rules` in [`agent`](crate::agent)): the number of critics, the entropy term,
+//! target smoothing, the actor's delay.
+//!
+//! One update on a batch of M masked steps (paper eqs. 3–7; TD3 paper for the deterministic
+//! family):
+//!
+//! 1. burn-in: the networks run the window's first steps without gradients, one step at a
+//!    time so the recurrent state can be zeroed where the batch's `reset` says;
+//! 2. the target `y` (`td_target`, eq. 3), without gradients;
+//! 3. the critic loss (`train_critics`, eq. 4) and one Adam step per critic;
+//! 4. every `policy_delay` updates: the actor loss (`train_actor`, eq. 5 or the
+//!    deterministic policy gradient), α's step for SAC (`train_alpha`, eq. 6) and
+//!    the Polyak update of the targets (`update_targets`, eq. 7).
+//!
+//! Recurrent networks train on sequence batches from [`crate::ReplayBuffer`]; losses average
+//! over the batch's `mask`, so padding past an episode's end never counts.
+
+use crate::agent::{Agent, AgentError, Smoothing, UpdateStats};
+use crate::replay::SequenceBatch;
+use esrl_nn::{Graph, LstmState, Module, Tensor};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+
+/// The trained part of a batch (its last `seq_len` steps) as tensors, time-major
+/// `(len·B, ·)`, with the loss normaliser 1/M.
+struct Trained {
+    batch: usize,
+    obs: Tensor,
+    action: Tensor,
+    reward: Tensor,
+    next_obs: Tensor,
+    /// 1 − terminated.
+    not_done: Tensor,
+    mask: Tensor,
+    /// 1/M, M the number of masked (real) steps.
+    norm: f32,
+    /// α at the start of the update (0 without the entropy term).
+    alpha: f32,
+}
+
+/// Recurrent states after burn-in (`None` entries for feed-forward networks).
+struct BurnIn {
+    actor: Option<LstmState>,
+    /// The actor that picks the target action (the target actor of TD3/DDPG), at s′.
+    actor_next: Option<LstmState>,
+    critics: Vec<Option<LstmState>>,
+    critic_targets: Vec<Option<LstmState>>,
+}
+
+/// Rows `[t0·B, t1·B)` of a time-major `(W·B, cols)` array as a tensor.
+fn steps(data: &[f32], batch: usize, cols: usize, t0: usize, t1: usize) -> Tensor {
+    Tensor::from_slice(
+        (t1 - t0) * batch,
+        cols,
+        &data[t0 * batch * cols..t1 * batch * cols],
+    )
+}
+
+/// Zeroes the rows of `state` whose `reset` flag is set.
+fn apply_resets(state: &mut Option<LstmState>, reset: &[bool]) {
+    let Some(s) = state else { return };
+    let h = s.h.cols();
+    for (b, _) in reset.iter().enumerate().filter(|(_, &r)| r) {
+        s.h.data_mut()[b * h..(b + 1) * h].fill(0.0);
+        s.c.data_mut()[b * h..(b + 1) * h].fill(0.0);
+    }
+}
+
+/// TD3's target policy smoothing: a′ ← clip(a′ + clip(ε, −c, c), −1, 1), ε ~ N(0, σ²).
+fn smooth(a: &mut Tensor, s: Smoothing, rng: &mut ChaCha8Rng) {
+    for x in a.data_mut() {
+        let e: f32 = rng.sample(StandardNormal);
+        *x = (*x + (s.sd * e).clamp(-s.clip, s.clip)).clamp(-1.0, 1.0);
+    }
+}
+
+impl Agent {
+    /// One gradient update on `batch`: critics; actor, α and targets when due.
+    pub fn update(&mut self, batch: &SequenceBatch) -> Result<UpdateStats, AgentError> {
+        let part = self.trained_part(batch);
+        let st = self.burn_in(batch);
+        let y = self.td_target(&part, &st);
+        let (critic_loss, q_mean) = self.train_critics(&part, y, &st)?;
+        let mut actor_loss = None;
+        if self.updates % self.rules.policy_delay == 0 {
+            actor_loss = Some(self.train_actor(&part, &st)?);
+            self.update_targets()?;
+        }
+        self.updates += 1;
+        Ok(UpdateStats {
+            critic_loss,
+            actor_loss,
+            alpha: self.has_entropy().then(|| self.alpha()),
+            q_mean,
+        })
+    }
+
+    fn trained_part(&self, batch: &SequenceBatch) -> Trained {
+        let b = batch.batch;
+        let (o, a) = (self.obs_dim, self.act_dim);
+        let (burn, w) = (batch.burn_in, batch.window);
+        let n_masked: f32 = batch.mask[burn * b..].iter().sum();
+        Trained {
+            batch: b,
+            obs: steps(&batch.obs, b, o, burn, w),
+            action: steps(&batch.action, b, a, burn, w),
+            reward: steps(&batch.reward, b, 1, burn, w),
+            next_obs: steps(&batch.next_obs, b, o, burn, w),
+            not_done: Tensor::from_vec(
+                (w - burn) * b,
+                1,
+                batch.terminated[burn * b..]
+                    .iter()
+                    .map(|d| 1.0 - d)
+                    .collect(),
+            ),
+            mask: steps(&batch.mask, b, 1, burn, w),
+            norm: 1.0 / n_masked.max(1.0),
+            alpha: self.alpha() as f32,
+        }
+    }
+
+    /// Eq. 3, without gradients:
+    ///
+    /// y = r + γ(1 − d)(minₖ Q̄ₖ(s′, a′) − α log π(a′|s′)),
+    ///
+    /// with a′ ~ π(·|s′) for SAC; for TD3/DDPG a′ = μ̄(s′) from the target actor, smoothed
+    /// to clip(a′ + clip(ε, −c, c), −1, 1) when `target_noise` > 0, and no entropy term.
+    fn td_target(&mut self, p: &Trained, st: &BurnIn) -> Tensor {
+        let b = p.batch;
+        let mut g = Graph::no_grad();
+        let o2 = g.constant(p.next_obs.clone());
+        let (a2, entropy) = match &self.actor_target {
+            None => {
+                let out = self.actor.forward(&mut g, o2, b, st.actor_next.as_ref());
+                let s = self.actor.sample(&mut g, &out, &mut self.rng);
+                let ent: Vec<f32> = g
+                    .value(s.log_prob)
+                    .data()
+                    .iter()
+                    .map(|lp| -p.alpha * lp)
+                    .collect();
+                (g.value(s.action).clone(), Some(ent))
+            }
+            Some(target) => {
+                let out = target.forward(&mut g, o2, b, st.actor_next.as_ref());
+                let det = target.deterministic(&mut g, &out);
+                let mut a2 = g.value(det).clone();
+                if let Some(s) = self.rules.smoothing {
+                    smooth(&mut a2, s, &mut self.rng);
+                }
+                (a2, None)
+            }
+        };
+        let a2v = g.constant(a2);
+        let mut qmin: Option<Vec<f32>> = None;
+        for (k, c) in self.critic_targets.iter().enumerate() {
+            let q = c
+                .forward(&mut g, o2, a2v, b, st.critic_targets[k].as_ref())
+                .q;
+            let q = g.value(q).data().to_vec();
+            qmin = Some(match qmin {
+                None => q,
+                Some(m) => m.iter().zip(&q).map(|(x, y)| x.min(*y)).collect(),
+            });
+        }
+        let qmin = qmin.unwrap_or_default();
+        let gamma = self.cfg.gamma as f32;
+        let (r, nd) = (p.reward.data(), p.not_done.data());
+        let y = (0..qmin.len())
+            .map(|i| {
+                let soft = qmin[i] + entropy.as_ref().map_or(0.0, |e| e[i]);
+                r[i] + gamma * nd[i] * soft
+            })
+            .collect();
+        Tensor::from_vec(qmin.len(), 1, y)
+    }
+
+    /// Eq. 4, summed over the critics, with one Adam step each:
+    ///
+    /// L(Qₖ) = 1/(2M) Σ m·(Qₖ(s, a) − y)²,
+    ///
+    /// M the masked steps. Returns the loss and the masked mean of Q₁.
+    fn train_critics(
+        &mut self,
+        p: &Trained,
+        y: Tensor,
+        st: &BurnIn,
+    ) -> Result<(f64, f64), AgentError> {
+        let (mut grads, loss, q_mean) = {
+            let mut g = Graph::new();
+            let (ov, av, yv, mv) = (
+                g.constant(p.obs.clone()),
+                g.constant(p.action.clone()),
+                g.constant(y),
+                g.constant(p.mask.clone()),
+            );
+            let mut total = None;
+            let mut q_mean = 0.0;
+            for (k, c) in self.critics.iter().enumerate() {
+                let q = c.forward(&mut g, ov, av, p.batch, st.critics[k].as_ref()).q;
+                if k == 0 {
+                    let qv = g.value(q).data();
+                    q_mean = qv
+                        .iter()
+                        .zip(p.mask.data())
+                        .map(|(q, m)| q * m)
+                        .sum::<f32>()
+                        * p.norm;
+                }
+                let d = g.sub(q, yv);
+                let d2 = g.square(d);
+                let d2 = g.mul(d2, mv);
+                let s = g.sum(d2);
+                let l = g.scale(s, 0.5 * p.norm);
+                total = Some(match total {
+                    None => l,
+                    Some(t) => g.add(t, l),
+                });
+            }
+            let loss = total.expect("at least one critic");
+            let lv = g.value(loss).item();
+            (g.backward(loss), lv, q_mean)
+        };
+        if !loss.is_finite() {
+            return Err(AgentError::NonFinite {
+                what: "critic loss",
+                update: self.updates,
+            });
+        }
+        for (c, opt) in self.critics.iter_mut().zip(&mut self.opt_critics) {
+            opt.apply(c.params_mut(), &mut grads)?;
+        }
+        Ok((f64::from(loss), f64::from(q_mean)))
+    }
+
+    /// The actor loss through the frozen critics, and one Adam step:
+    ///
+    /// - SAC (eq. 5): L(π) = 1/M Σ m·(α log π(ã|s) − minₖ Qₖ(s, ã)), ã ~ π(·|s) re-sampled;
+    /// - TD3/DDPG: L(μ) = −1/M Σ m·Q₁(s, μ(s)).
+    ///
+    /// Then α's step (SAC).
+    fn train_actor(&mut self, p: &Trained, st: &BurnIn) -> Result<f64, AgentError> {
+        let batch = p.batch.max(1);
+        let stochastic = self.has_entropy();
+        let (mut grads, loss, log_prob) = {
+            let mut g = Graph::new();
+            for c in &self.critics {
+                g.freeze(c.params());
+            }
+            let ov = g.constant(p.obs.clone());
+            let mv = g.constant(p.mask.clone());
+            let out = self.actor.forward(&mut g, ov, batch, st.actor.as_ref());
+            let (act, log_prob) = if stochastic {
+                let s = self.actor.sample(&mut g, &out, &mut self.rng);
+                (s.action, Some(s.log_prob))
+            } else {
+                (self.actor.deterministic(&mut g, &out), None)
+            };
+            // SAC takes the minimum of its critics; TD3 and DDPG follow Q₁.
+            let critics = if stochastic { self.critics.len() } else { 1 };
+            let mut qmin = None;
+            for (k, c) in self.critics.iter().take(critics).enumerate() {
+                let q = c.forward(&mut g, ov, act, batch, st.critics[k].as_ref()).q;
+                qmin = Some(match qmin {
+                    None => q,
+                    Some(m) => g.minimum(m, q),
+                });
+            }
+            let qmin = qmin.expect("at least one critic");
+            let per_step = match log_prob {
+                Some(lp) => {
+                    let alp = g.scale(lp, p.alpha);
+                    g.sub(alp, qmin)
+                }
+                None => g.neg(qmin),
+            };
+            let masked = g.mul(per_step, mv);
+            let s = g.sum(masked);
+            let loss = g.scale(s, p.norm);
+            let lv = g.value(loss).item();
+            let lp_values = log_prob.map(|lp| g.value(lp).clone());
+            (g.backward(loss), lv, lp_values)
+        };
+        if !loss.is_finite() {
+            return Err(AgentError::NonFinite {
+                what: "actor loss",
+                update: self.updates,
+            });
+        }
+        self.opt_actor.apply(self.actor.params_mut(), &mut grads)?;
+        if let Some(lp) = log_prob {
+            self.train_alpha(&lp, p)?;
+        }
+        Ok(f64::from(loss))
+    }
+
+    /// Eq. 6, one Adam step on log α when α is learned:
+    ///
+    /// L(log α) = −mean(log α · (log π + H̄)) ⇒ ∂L/∂log α = −mean(log π + H̄),
+    ///
+    /// the mean over the masked steps of the actor loss's samples. A non-finite gradient
+    /// skips the step.
+    fn train_alpha(&mut self, log_prob: &Tensor, p: &Trained) -> Result<(), AgentError> {
+        let Some(entropy) = self.rules.entropy.filter(|e| e.learn) else {
+            return Ok(());
+        };
+        let mean_lp: f32 = log_prob
+            .data()
+            .iter()
+            .zip(p.mask.data())
+            .map(|(l, m)| l * m)
+            .sum::<f32>()
+            * p.norm;
+        let mut grad = [-(mean_lp + entropy.target)];
+        if grad[0].is_finite() {
+            self.opt_alpha.step(&mut self.log_alpha, &mut grad)?;
+        }
+        Ok(())
+    }
+
+    /// Eq. 7: θ̄ ← τθ + (1 − τ)θ̄ for the target critics, and the target actor of TD3/DDPG.
+    fn update_targets(&mut self) -> Result<(), AgentError> {
+        let tau = self.cfg.tau as f32;
+        for (t, c) in self.critic_targets.iter_mut().zip(&self.critics) {
+            t.params_mut().polyak_update(c.params(), tau)?;
+        }
+        if let Some(t) = &mut self.actor_target {
+            t.params_mut().polyak_update(self.actor.params(), tau)?;
+        }
+        Ok(())
+    }
+
+    /// Runs the burn-in prefix without gradients and returns every network's state at the
+    /// start of the trained part.
+    fn burn_in(&mut self, batch: &SequenceBatch) -> BurnIn {
+        let b = batch.batch;
+        let (o, a) = (self.obs_dim, self.act_dim);
+        let mut st = BurnIn {
+            actor: self.actor.zero_state(b),
+            actor_next: self.actor.zero_state(b),
+            critics: self.critics.iter().map(|c| c.zero_state(b)).collect(),
+            critic_targets: self
+                .critic_targets
+                .iter()
+                .map(|c| c.zero_state(b))
+                .collect(),
+        };
+        let recurrent = st.actor.is_some() || st.critics.iter().any(Option::is_some);
+        if !recurrent {
+            return st;
+        }
+        for t in 0..=batch.burn_in {
+            let reset = &batch.reset[t * b..(t + 1) * b];
+            apply_resets(&mut st.actor, reset);
+            apply_resets(&mut st.actor_next, reset);
+            for s in st.critics.iter_mut().chain(st.critic_targets.iter_mut()) {
+                apply_resets(s, reset);
+            }
+            if t == batch.burn_in {
+                break;
+            }
+            let mut g = Graph::no_grad();
+            let ov = g.constant(steps(&batch.obs, b, o, t, t + 1));
+            let av = g.constant(steps(&batch.action, b, a, t, t + 1));
+            let o2 = g.constant(steps(&batch.next_obs, b, o, t, t + 1));
+            st.actor = self.actor.forward(&mut g, ov, b, st.actor.as_ref()).state;
+            for (k, c) in self.critics.iter().enumerate() {
+                st.critics[k] = c.forward(&mut g, ov, av, b, st.critics[k].as_ref()).state;
+            }
+            let next_actor = self.actor_target.as_ref().unwrap_or(&self.actor);
+            let out = next_actor.forward(&mut g, o2, b, st.actor_next.as_ref());
+            st.actor_next = out.state.clone();
+            let a2 = match &self.actor_target {
+                None => self.actor.sample(&mut g, &out, &mut self.rng).action,
+                Some(target) => target.deterministic(&mut g, &out),
+            };
+            for (k, c) in self.critic_targets.iter().enumerate() {
+                st.critic_targets[k] = c
+                    .forward(&mut g, o2, a2, b, st.critic_targets[k].as_ref())
+                    .state;
+            }
+        }
+        st
+    }
+}

@@ -1,0 +1,38 @@
+//! Evaluating a trained policy, one implementation for `esrl eval`, `esrl record`,
+//! `esrl compare` and Python (`esrl_rs`).
+//!
+//! - [`load`]: a run folder, a checkpoint folder or `RUN/best` → [`LoadedRun`] (the run's
+//!   config, its environment, the agent with the checkpoint's weights).
+//! - [`episode`]: one deterministic episode through `esrl_sim`'s episode loop, keeping the
+//!   first observation and, on the walking task, the gait samples ([`walk_episode`]).
+//! - [`report`]: K episodes in parallel → [`EvalReport`] with the gait metrics of SPEC §6,
+//!   written to `RUN/eval.json`.
+//! - [`stick`]: the robot's side view along an episode; [`recording`]: MCAP for Foxglove.
+//!
+//! ```no_run
+//! let loaded = esrl_eval::load_run(std::path::Path::new("runs/es-sac-s0"))?;
+//! let report = esrl_eval::evaluate(&loaded, 0, 10, None)?;
+//! println!("mean return {:.1}, {} of 10 fell", report.mean.ret, report.mean.falls);
+//! # Ok::<(), esrl_run::Error>(())
+//! ```
+//!
+//! # Limitations
+//!
+//! - Evaluation is deterministic (tanh μ) and on the run's own environment settings; it does
+//!   not test robustness to pushes, slopes or model changes.
+//! - A 60 s walking episode adds about 0.4 MB of trace to `eval.json`.
+
+pub mod episode;
+pub mod load;
+pub mod recording;
+pub mod report;
+pub mod stick;
+
+pub use episode::{rollout, walk_episode, Rollout, WalkEpisode};
+pub use load::{load_run, locate, LoadedRun};
+pub use recording::{metadata, Recorder};
+pub use report::{
+    eval_path, evaluate, evaluate_and_write, mean_gait, EpisodeEval, EvalMean, EvalReport, Trace,
+    EVAL_FILE,
+};
+pub use stick::{StickFigure, StickRecorder, DEFAULT_INTERVAL};

@@ -1,0 +1,101 @@
+//! Loading a trained policy: a run folder (its newest checkpoint), a checkpoint folder, or
+//! `RUN/best`, with the run's configuration and environment.
+
+use esrl_agents::Agent;
+use esrl_run::checkpoint;
+use esrl_run::{bail, build, Context, Result, RunDir, TrainConfig};
+use esrl_sim::{RobotModel, WalkEnv};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// A trained agent loaded from a run or checkpoint folder.
+pub struct LoadedRun {
+    /// The run folder (holds `config.toml`).
+    pub run: PathBuf,
+    /// The checkpoint folder the weights came from.
+    pub checkpoint: PathBuf,
+    /// The run's configuration.
+    pub config: TrainConfig,
+    /// The agent with the checkpoint's weights.
+    pub agent: Agent,
+    /// The robot model (walking runs).
+    pub model: Option<Arc<RobotModel>>,
+}
+
+impl LoadedRun {
+    /// A fresh walking environment of this run (`None` for a pendulum run).
+    pub fn walk_env(&self) -> Result<Option<WalkEnv>> {
+        match &self.model {
+            Some(model) => Ok(Some(
+                WalkEnv::from_model(model.clone(), self.config.walk.clone())
+                    .context("building the walking environment")?,
+            )),
+            None => Ok(None),
+        }
+    }
+}
+
+/// Finds the run folder and the checkpoint folder for a path that is either.
+pub fn locate(path: &Path) -> Result<(PathBuf, PathBuf)> {
+    if !path.exists() {
+        bail!("{}: no such run or checkpoint folder", path.display());
+    }
+    if !path.is_dir() {
+        bail!(
+            "{} is a file; expected a run folder (with config.toml) or a checkpoint folder \
+             (with agent.safetensors)",
+            path.display()
+        );
+    }
+    // A checkpoint folder (it holds the weights; checkpoints also keep a copy of the run's
+    // config.toml, so test for the weights first).
+    if path.join("agent.safetensors").is_file() {
+        let abs = path
+            .canonicalize()
+            .with_context(|| format!("resolving {}", path.display()))?;
+        if let Some(run) = abs.parent().filter(|r| r.join(RunDir::CONFIG).is_file()) {
+            return Ok((run.to_path_buf(), path.to_path_buf()));
+        }
+        if path.join(RunDir::CONFIG).is_file() {
+            return Ok((path.to_path_buf(), path.to_path_buf()));
+        }
+        bail!(
+            "{} looks like a checkpoint folder, but neither it nor its parent folder has a \
+             config.toml, so the architecture of the networks is unknown",
+            path.display()
+        );
+    }
+    if path.join(RunDir::CONFIG).is_file() {
+        let ckpt = checkpoint::find(path).with_context(|| {
+            format!(
+                "{} has no complete checkpoint (checkpoint/ with state.json and \
+                 agent.safetensors); a run killed before its first checkpoint has none",
+                path.display()
+            )
+        })?;
+        return Ok((path.to_path_buf(), ckpt));
+    }
+    bail!(
+        "{} is neither a run folder (no config.toml) nor a checkpoint folder (no \
+         agent.safetensors)",
+        path.display()
+    )
+}
+
+/// Loads the run's config and the checkpoint's weights (run or checkpoint folder).
+pub fn load_run(path: &Path) -> Result<LoadedRun> {
+    let (run, ckpt) = locate(path)?;
+    let (config, _) = checkpoint::run_config(&run)?;
+    let envs = build::envs(config.env, &config.walk)
+        .with_context(|| format!("the environment of {}", run.display()))?;
+    let mut agent =
+        build::agent(&config, &envs).with_context(|| format!("in {}", run.display()))?;
+    checkpoint::load_agent(&ckpt, &mut agent)?;
+    Ok(LoadedRun {
+        run,
+        checkpoint: ckpt,
+        config,
+        agent,
+        model: envs.model,
+    })
+}

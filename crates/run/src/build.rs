@@ -1,0 +1,143 @@
+//! Building what a configuration describes, in one place: its environments (the URDF parsed
+//! once and shared), its agent, and its learner.
+
+use crate::config::{EnvKind, TrainConfig};
+use crate::error::{Context, Error, Result};
+use esrl_agents::{Agent, Learner, Trainer};
+use esrl_es::{Hybrid, LocalEvaluator};
+use esrl_sim::{Env, MakeEnv, Pendulum, RobotModel, WalkConfig, WalkEnv};
+use std::sync::Arc;
+
+/// The environments of a configuration: a factory every thread may call, the sizes the
+/// networks need, and the robot model of walking runs.
+#[derive(Clone)]
+pub struct Envs {
+    /// Makes a fresh environment per call.
+    pub make: Arc<MakeEnv>,
+    /// Observation width.
+    pub obs_dim: usize,
+    /// Action width.
+    pub act_dim: usize,
+    /// Steps after which an episode is truncated.
+    pub max_episode_steps: usize,
+    /// The parsed robot (walking runs).
+    pub model: Option<Arc<RobotModel>>,
+}
+
+/// Loads the robot a walking config names: its URDF, or the embedded humanoid.
+pub fn load_model(walk: &WalkConfig) -> Result<Arc<RobotModel>> {
+    match &walk.urdf {
+        Some(path) => match RobotModel::from_urdf_path(path) {
+            Ok(model) => Ok(Arc::new(model)),
+            // The read error names the file itself; the others need it said.
+            Err(e @ esrl_sim::UrdfError::Io { .. }) => Err(e.into()),
+            Err(e) => Err(e).with_context(|| format!("in URDF {}", path.display())),
+        },
+        None => RobotModel::humanoid_shared().context("loading the embedded humanoid"),
+    }
+}
+
+/// The environments of `env` with the walking settings `walk`. Builds (and so validates)
+/// one environment up front, so the factory itself cannot fail later.
+pub fn envs(env: EnvKind, walk: &WalkConfig) -> Result<Envs> {
+    match env {
+        EnvKind::Pendulum => {
+            let probe = Pendulum::new();
+            Ok(Envs {
+                make: Arc::new(|| Box::new(Pendulum::new()) as Box<dyn Env>),
+                obs_dim: probe.obs_dim(),
+                act_dim: probe.act_dim(),
+                max_episode_steps: probe.max_episode_steps(),
+                model: None,
+            })
+        }
+        EnvKind::Walk => {
+            let model = load_model(walk)?;
+            let probe = WalkEnv::from_model(model.clone(), walk.clone()).with_context(|| {
+                match &walk.urdf {
+                    Some(p) => format!("building the walking environment from {}", p.display()),
+                    None => "building the walking environment".into(),
+                }
+            })?;
+            let (shared, walk) = (model.clone(), walk.clone());
+            Ok(Envs {
+                make: Arc::new(move || {
+                    Box::new(
+                        WalkEnv::from_model(shared.clone(), walk.clone())
+                            .expect("the same model and config built an environment before"),
+                    ) as Box<dyn Env>
+                }),
+                obs_dim: probe.obs_dim(),
+                act_dim: probe.act_dim(),
+                max_episode_steps: probe.max_episode_steps(),
+                model: Some(model),
+            })
+        }
+    }
+}
+
+/// A fresh agent of `cfg` for environments of these sizes, weights drawn from its seed.
+pub fn agent(cfg: &TrainConfig, envs: &Envs) -> Result<Agent> {
+    Agent::new(
+        cfg.agent.algo(),
+        envs.obs_dim,
+        envs.act_dim,
+        &cfg.network,
+        &cfg.rl,
+        cfg.seed,
+    )
+    .with_context(|| format!("building the {} agent", cfg.agent.name()))
+}
+
+/// The learner of a configuration: a plain trainer or the hybrid loop.
+#[derive(Debug, Clone)]
+pub enum AnyLearner {
+    /// SAC / TD3 / DDPG.
+    Plain(Box<Trainer>),
+    /// ES-SAC / ES-TD3 / ES-DDPG.
+    Hybrid(Box<Hybrid>),
+}
+
+/// What to do with a learner of either kind: [`AnyLearner::visit`] calls it with the
+/// concrete one, so generic code (a training session) runs on both.
+pub trait LearnerVisitor {
+    /// The visit's result.
+    type Output;
+    /// Visits a learner.
+    fn visit<L: Learner>(self, learner: L) -> Self::Output;
+}
+
+impl AnyLearner {
+    /// Calls `visitor` with the learner inside.
+    pub fn visit<V: LearnerVisitor>(self, visitor: V) -> V::Output {
+        match self {
+            AnyLearner::Plain(t) => visitor.visit(*t),
+            AnyLearner::Hybrid(h) => visitor.visit(*h),
+        }
+    }
+}
+
+/// A fresh learner of `cfg`: the hybrid loop evaluates its populations on `threads` local
+/// threads (one per core when 0).
+pub fn learner(cfg: &TrainConfig, envs: &Envs, threads: usize) -> Result<AnyLearner> {
+    let agent = agent(cfg, envs)?;
+    Ok(if cfg.agent.is_hybrid() {
+        let threads = if threads == 0 {
+            std::thread::available_parallelism().map_or(1, |n| n.get())
+        } else {
+            threads
+        };
+        let evaluator = LocalEvaluator::new(envs.make.clone(), threads)
+            .map_err(Error::other)
+            .context("starting the rollout thread pool")?;
+        AnyLearner::Hybrid(Box::new(Hybrid::new(
+            agent,
+            cfg.es.clone(),
+            cfg.inner_cycles,
+            cfg.seed,
+            Arc::new(evaluator),
+        )))
+    } else {
+        AnyLearner::Plain(Box::new(Trainer::new(agent, cfg.seed)))
+    })
+}

@@ -1,0 +1,61 @@
+//! A training run on disk: its configuration, the learner built from it, its folder, its
+//! checkpoints, and the session that trains it.
+//!
+//! - [`config`]: [`TrainConfig`], resolved from a preset, a TOML file and [`Overrides`]; it
+//!   is the run folder's `config.toml`.
+//! - [`build`]: the one place that loads the URDF and builds the environments, the agent
+//!   and the learner ([`AnyLearner`]: a plain [`esrl_agents::Trainer`] or an
+//!   [`esrl_es::Hybrid`]) of a config.
+//! - [`training`]: [`Training`] drives any [`esrl_agents::Learner`] row by row into its
+//!   folder: metrics, summary, `RUN/best/`, checkpoints.
+//! - [`checkpoint`], [`run_dir`], [`summary`]: the files, written atomically and verified
+//!   before they are trusted.
+//!
+//! ```no_run
+//! use esrl_run::{build, AgentKind, LearnerVisitor, Overrides, TrainConfig, Training};
+//! use esrl_agents::Learner;
+//! use std::path::Path;
+//!
+//! struct Train<'a>(&'a TrainConfig, &'a build::Envs);
+//! impl LearnerVisitor for Train<'_> {
+//!     type Output = esrl_run::Result<()>;
+//!     fn visit<L: Learner>(self, learner: L) -> Self::Output {
+//!         let dir = Path::new("runs/es-sac-s0");
+//!         let (mut t, _) = Training::open(self.0, dir, learner, self.1.make.clone(), false)?;
+//!         while !t.done() {
+//!             println!("{}", t.step()?.summary);
+//!         }
+//!         t.finish(true)
+//!     }
+//! }
+//!
+//! let cfg = TrainConfig::resolve(AgentKind::EsSac, &Overrides::default(), Some(0))?;
+//! let envs = build::envs(cfg.env, &cfg.walk)?;
+//! build::learner(&cfg, &envs, 0)?.visit(Train(&cfg, &envs))?;
+//! # Ok::<(), esrl_run::Error>(())
+//! ```
+//!
+//! Errors are [`Error`]s that name the file, field or value at fault; nothing here prints.
+//!
+//! # Limitations
+//!
+//! - A run folder belongs to one process at a time; nothing locks it.
+//! - A checkpoint is written every `checkpoint_every` rows and at the end: a kill loses the
+//!   rows since the last one (they are recomputed, bit for bit, on resume).
+//! - Checkpoints are bit-exact only on the machine kind that wrote them (see `esrl-nn`'s
+//!   limitations on SIMD widths).
+
+pub mod build;
+pub mod checkpoint;
+pub mod config;
+mod error;
+pub mod run_dir;
+pub mod summary;
+pub mod training;
+
+pub use build::{AnyLearner, Envs, LearnerVisitor};
+pub use config::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
+pub use error::{Context, Error, Result};
+pub use run_dir::RunDir;
+pub use summary::Summary;
+pub use training::{Opening, RowDone, Training};

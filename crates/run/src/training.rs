@@ -1,0 +1,254 @@
+//! A training session: a [`Learner`] driven row by row into its run folder. Each
+//! [`Training::step`] runs one row and writes what it produced — the metrics row, the best
+//! policy, the summary, a checkpoint every `checkpoint_every` rows — and
+//! [`Training::finish`] writes the last checkpoint. Whoever drives it (the `esrl` binary)
+//! decides when to stop and what to print.
+
+use crate::checkpoint::{self, BestInfo, RunState};
+use crate::config::TrainConfig;
+use crate::error::{Context, Error, Result};
+use crate::run_dir::{write_atomic, RunDir};
+use crate::summary::Summary;
+use esrl_agents::{AgentError, Learner, Row};
+use esrl_metrics::CurveSummary;
+use esrl_sim::MakeEnv;
+use serde_json::{Map, Value};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// How a session found its run folder.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Opening {
+    /// A new run in a new folder.
+    New,
+    /// Continued from a checkpoint.
+    Resumed {
+        /// The checkpoint folder.
+        checkpoint: PathBuf,
+        /// Rows it covers.
+        rows: usize,
+        /// Environment steps it had taken.
+        env_steps: u64,
+    },
+    /// A run stopped before its first checkpoint, started over in its own folder.
+    StartedOver,
+}
+
+/// What one row did, for whoever prints progress.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RowDone {
+    /// Rows done, this one included.
+    pub rows: usize,
+    /// Its learning-curve value.
+    pub curve: f64,
+    /// The best curve value so far, this row included.
+    pub best: f64,
+    /// Its one-line description.
+    pub summary: String,
+}
+
+/// A learner and the run folder it trains into.
+pub struct Training<L: Learner> {
+    cfg: TrainConfig,
+    root: PathBuf,
+    learner: L,
+    envs: Arc<MakeEnv>,
+    run: RunDir,
+    state: RunState,
+    started: Instant,
+    /// Training seconds before this session (resumed runs).
+    wall0: f64,
+}
+
+impl<L: Learner> Training<L> {
+    /// Opens `root` for `learner`, built fresh from `cfg`: a new folder, or, when `resume`,
+    /// the run continued from its newest checkpoint — checked against its manifest, the
+    /// configuration and the metric logs before anything is truncated — or started over
+    /// when it stopped before its first checkpoint. Then runs the learner's preparation
+    /// (the hybrid loop's warm start) with environments from `envs`.
+    pub fn open(
+        cfg: &TrainConfig,
+        root: &Path,
+        mut learner: L,
+        envs: Arc<MakeEnv>,
+        resume: bool,
+    ) -> Result<(Self, Opening)> {
+        let mut state = RunState::fresh();
+        let (run, opening) = match (resume, checkpoint::find(root)) {
+            (true, Some(dir)) => {
+                let (run_state, learner_state) = checkpoint::load_state::<L::State>(&dir)?;
+                checkpoint::check_config(&dir, &run_state, cfg)?;
+                checkpoint::check_state(root, &dir, &learner, &run_state, &learner_state)?;
+                let env_steps = esrl_agents::LearnerState::env_steps(&learner_state);
+                checkpoint::restore(&dir, &mut learner, &run_state, learner_state)?;
+                state = run_state;
+                let run = RunDir::resume(root, state.rows)?;
+                let opening = Opening::Resumed {
+                    checkpoint: dir,
+                    rows: state.rows,
+                    env_steps,
+                };
+                (run, opening)
+            }
+            (true, None) => {
+                // Killed before its first checkpoint: nothing to lose but the rows of an
+                // unfinished first stretch, so the run starts over in its own folder.
+                checkpoint::remove_best(root)?;
+                let run = RunDir::resume(root, 0)?;
+                write_atomic(&root.join(RunDir::CONFIG), cfg.to_toml()?.as_bytes())?;
+                (run, Opening::StartedOver)
+            }
+            (false, _) => (RunDir::create(root, &cfg.to_toml()?)?, Opening::New),
+        };
+        let started = Instant::now();
+        learner.prepare(envs.as_ref())?;
+        let wall0 = state.wall_s;
+        Ok((
+            Self {
+                cfg: cfg.clone(),
+                root: root.to_path_buf(),
+                learner,
+                envs,
+                run,
+                state,
+                started,
+                wall0,
+            },
+            opening,
+        ))
+    }
+
+    /// The learner.
+    pub fn learner(&self) -> &L {
+        &self.learner
+    }
+
+    /// Rows done (resumed ones included).
+    pub fn rows(&self) -> usize {
+        self.state.rows
+    }
+
+    /// The rows the budget asks for: generations (hybrid) or episodes (plain).
+    pub fn total(&self) -> usize {
+        if self.cfg.agent.is_hybrid() {
+            self.cfg.generations
+        } else {
+            self.cfg.episodes
+        }
+    }
+
+    /// Training seconds so far, earlier sessions included.
+    pub fn wall_s(&self) -> f64 {
+        self.wall0 + self.started.elapsed().as_secs_f64()
+    }
+
+    /// Whether the budget is spent: every row done, or the environment-step budget reached.
+    pub fn done(&self) -> bool {
+        let steps_spent = self
+            .cfg
+            .max_env_steps
+            .is_some_and(|b| self.learner.env_steps() >= b);
+        self.state.rows >= self.total() || steps_spent
+    }
+
+    /// Runs one row and writes it: the metrics row (with `wall_s`), `RUN/best/` when the row
+    /// beat every earlier one, the summary, and a checkpoint when one is due. A learner that
+    /// diverges (a non-finite loss or return) ends the session with an error that keeps the
+    /// last good checkpoint.
+    pub fn step(&mut self) -> Result<RowDone> {
+        let row = match self.learner.run_row(self.envs.as_ref()) {
+            Ok(row) if !row.curve().is_finite() => Err(AgentError::NonFinite {
+                what: "return",
+                update: self.learner.agent().updates(),
+            }),
+            other => other,
+        };
+        let row = row.map_err(|e| {
+            Error::Msg(format!(
+                "training stopped at row {}: {e}. The last good checkpoint in {} is kept; \
+                 lower the learning rates or the gradient clip and resume or restart.",
+                self.state.rows,
+                self.root.join(RunDir::CHECKPOINT).display()
+            ))
+        })?;
+        let curve = row.curve();
+        let mut value = serde_json::to_value(&row)?;
+        if let Some(m) = value.as_object_mut() {
+            m.insert("wall_s".into(), serde_json::json!(self.wall_s()));
+        }
+        self.run.append(&value)?;
+        let previous_best = self.best();
+        if curve > previous_best {
+            if let Some(agent) = self.learner.scored_agent()? {
+                let info = BestInfo {
+                    generation: self.learner.rows() - 1,
+                    fitness: curve,
+                    env_steps: self.learner.env_steps(),
+                };
+                checkpoint::save_best(&self.root, &agent, &info)?;
+            }
+        }
+        self.state.rows += 1;
+        self.state.curve.push(curve);
+        self.state.q0.push(row.q0());
+        self.write_summary(false)?;
+        if self.state.rows % self.cfg.checkpoint_every == 0 {
+            self.checkpoint()?;
+        }
+        Ok(RowDone {
+            rows: self.state.rows,
+            curve,
+            best: previous_best.max(curve),
+            summary: row.summary(),
+        })
+    }
+
+    /// Writes the last checkpoint and the summary, `finished` saying whether the budget was
+    /// completed.
+    pub fn finish(&mut self, finished: bool) -> Result<()> {
+        self.checkpoint()?;
+        self.write_summary(finished)
+    }
+
+    /// The best curve value so far (−∞ before the first row).
+    fn best(&self) -> f64 {
+        self.state
+            .curve
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    fn checkpoint(&mut self) -> Result<()> {
+        self.state.wall_s = self.wall_s();
+        checkpoint::save(&self.root, &self.cfg, &self.learner, &mut self.state)
+            .with_context(|| format!("writing a checkpoint of {}", self.root.display()))
+    }
+
+    fn write_summary(&self, finished: bool) -> Result<()> {
+        if self.state.curve.is_empty() {
+            return Ok(());
+        }
+        let mut learner = Map::new();
+        for (name, value) in self.learner.summary() {
+            if let Some(v) = value {
+                learner.insert(name.into(), Value::from(v));
+            }
+        }
+        let summary = Summary {
+            agent: self.cfg.agent.name().into(),
+            env: self.cfg.env,
+            seed: self.cfg.seed,
+            curve: CurveSummary::from_curve(&self.state.curve, None)?,
+            q0_mean: esrl_metrics::q0_mean(&self.state.q0),
+            length: self.state.curve.len(),
+            env_steps: self.learner.env_steps(),
+            best: self.best(),
+            wall_s: self.wall_s(),
+            finished,
+            learner,
+        };
+        self.run.write_summary(&summary)
+    }
+}
