@@ -1,26 +1,25 @@
 //! Contract: impossible or malformed settings stop `esrl train` before anything is written,
 //! with a message naming the field and a non-zero exit — never a panic.
 
-use std::process::Command;
+mod common;
+
+use common::esrl;
 
 fn train_with(toml: &str, agent: &str) -> (bool, String, bool) {
     let tmp = tempfile::tempdir().unwrap();
     let cfg = tmp.path().join("c.toml");
     std::fs::write(&cfg, toml).unwrap();
     let out_dir = tmp.path().join("run");
-    let out = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args([
-            "train",
-            agent,
-            "--preset",
-            "smoke",
-            "--config",
-            cfg.to_str().unwrap(),
-            "--out",
-            out_dir.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let out = esrl(&[
+        "train",
+        agent,
+        "--preset",
+        "smoke",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert!(!stderr.contains("panicked"), "panic on {toml:?}: {stderr}");
     (
@@ -56,10 +55,7 @@ fn bad_values_name_their_field() {
 
 #[test]
 fn unknown_agent_is_refused_with_the_valid_names() {
-    let out = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(["train", "es-ppo"])
-        .output()
-        .unwrap();
+    let out = esrl(&["train", "es-ppo"]);
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(

@@ -3,22 +3,11 @@
 //! ES-TD3, whose individuals act deterministically: replaying the best generation's episode
 //! (same reset seed) with the saved policy must give back the fitness it was kept for.
 
+mod common;
+
+use common::{curve, read_json, stdout as esrl};
 use esrl_streams::Stream;
 use serde_json::Value;
-use std::process::Command;
-
-fn esrl(args: &[&str]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args)
-        .output()
-        .expect("run esrl");
-    assert!(
-        out.status.success(),
-        "esrl {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
 
 #[test]
 fn best_folder_holds_the_policy_that_scored_the_best_curve_value() {
@@ -40,15 +29,7 @@ fn best_folder_holds_the_policy_that_scored_the_best_curve_value() {
         run_s,
     ]);
 
-    let curve: Vec<f64> = std::fs::read_to_string(run.join("metrics.jsonl"))
-        .unwrap()
-        .lines()
-        .map(|l| {
-            serde_json::from_str::<Value>(l).unwrap()["curve"]
-                .as_f64()
-                .unwrap()
-        })
-        .collect();
+    let curve = curve(&run);
     assert_eq!(curve.len(), 6);
     let (argmax, max) =
         curve
@@ -60,9 +41,7 @@ fn best_folder_holds_the_policy_that_scored_the_best_curve_value() {
                 |a, (i, c)| if c > a.1 { (i, c) } else { a },
             );
 
-    let info: Value =
-        serde_json::from_str(&std::fs::read_to_string(run.join("best/best.json")).unwrap())
-            .unwrap();
+    let info = read_json(&run.join("best/best.json"));
     assert_eq!(info["generation"].as_u64().unwrap() as usize, argmax);
     assert_eq!(info["fitness"].as_f64().unwrap(), max);
     assert!(!run.join("best.tmp").exists() && !run.join("best.old").exists());

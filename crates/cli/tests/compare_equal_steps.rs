@@ -4,27 +4,14 @@
 //! and stops at the first episode/generation boundary past it; a run folder trained with a
 //! different configuration is refused rather than mixed into the table.
 
+mod common;
+
+use common::{esrl, read_json, rows};
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn esrl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args)
-        .output()
-        .expect("run esrl")
-}
 
 fn summary(run: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap()
-}
-
-fn rows(run: &Path) -> Vec<Value> {
-    std::fs::read_to_string(run.join("metrics.jsonl"))
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).unwrap())
-        .collect()
+    read_json(&run.join("summary.json"))
 }
 
 #[test]

@@ -5,38 +5,14 @@
 //! invocation reuses the finished runs (no file of theirs is rewritten) and writes the same
 //! table; unknown agent names fail with the list of valid ones.
 
-use serde_json::Value;
+mod common;
+
+use common::{curve, esrl, ok_output as ok, read_json};
 use std::path::Path;
-use std::process::{Command, Output};
 use std::time::SystemTime;
 
-fn esrl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args)
-        .output()
-        .expect("run esrl")
-}
-
-fn ok(args: &[&str]) -> Output {
-    let out = esrl(args);
-    assert!(
-        out.status.success(),
-        "esrl {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
 fn nauc(run: &Path) -> f64 {
-    let curve: Vec<f64> = std::fs::read_to_string(run.join("metrics.jsonl"))
-        .unwrap()
-        .lines()
-        .map(|l| {
-            serde_json::from_str::<Value>(l).unwrap()["curve"]
-                .as_f64()
-                .unwrap()
-        })
-        .collect();
+    let curve = curve(run);
     curve.iter().sum::<f64>() / curve.len() as f64
 }
 
@@ -96,10 +72,7 @@ fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
     // The budget table: one row per run, with the run's own generations/episodes and steps.
     assert!(md.contains("## Budget per run"), "{md}");
     for run in ["es-sac-s0", "es-sac-s1", "sac-s0", "sac-s1"] {
-        let summary: Value = serde_json::from_str(
-            &std::fs::read_to_string(dir.join(run).join("summary.json")).unwrap(),
-        )
-        .unwrap();
+        let summary = read_json(&dir.join(run).join("summary.json"));
         let unit = if run.starts_with("es-") {
             "generations"
         } else {

@@ -2,42 +2,9 @@
 //! same `metrics.jsonl` (wall-clock fields aside), and every plain agent repeats itself
 //! exactly for the same seed and differs for another.
 
-use std::collections::BTreeMap;
-use std::path::Path;
+mod common;
 
-/// Every tensor of a safetensors file, by name (file bytes may differ in header order).
-fn tensors(path: &Path) -> BTreeMap<String, Vec<u32>> {
-    esrl_nn::load_tensors(path)
-        .unwrap()
-        .into_iter()
-        .map(|(k, t)| (k, t.data.iter().map(|x| x.to_bits()).collect()))
-        .collect()
-}
-use std::process::Command;
-
-fn esrl(args: &[&str]) {
-    let out = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args)
-        .output()
-        .expect("run esrl");
-    assert!(
-        out.status.success(),
-        "esrl {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-/// The metric rows without their wall-clock field.
-fn rows(dir: &Path) -> Vec<serde_json::Value> {
-    let text = std::fs::read_to_string(dir.join("metrics.jsonl")).unwrap();
-    text.lines()
-        .map(|l| {
-            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
-            v.as_object_mut().unwrap().remove("wall_s");
-            v
-        })
-        .collect()
-}
+use common::{ok as esrl, rows, tensors};
 
 #[test]
 fn es_sac_is_identical_on_one_and_two_threads() {

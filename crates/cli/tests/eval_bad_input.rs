@@ -3,45 +3,15 @@
 //! zero episodes — with a non-zero exit and a message naming the file, never a panic, and
 //! leave the run's files as they were.
 
+mod common;
+
+use common::{esrl, smoke as train};
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn esrl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args)
-        .output()
-        .expect("run esrl")
-}
-
-fn train(agent: &str, dir: &Path, extra: &[&str]) {
-    let mut args = vec![
-        "train",
-        agent,
-        "--preset",
-        "smoke",
-        "--out",
-        dir.to_str().unwrap(),
-        "--no-progress",
-    ];
-    args.extend(extra);
-    let out = esrl(&args);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-/// Runs `args`, expects failure with every `needle` in stderr and no panic.
+/// Runs `args`, expects failure (status 1) with every `needle` in stderr and no panic.
 fn fails(args: &[&str], needles: &[&str]) {
-    let out = esrl(args);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(
-        out.status.code(),
-        Some(1),
-        "esrl {args:?} should fail: {err}"
-    );
-    assert!(!err.contains("panicked"), "esrl {args:?} panicked: {err}");
+    let err = common::fails(args);
+    assert_eq!(esrl(args).status.code(), Some(1), "esrl {args:?}: {err}");
     for n in needles {
         assert!(err.contains(n), "esrl {args:?}: `{n}` not in: {err}");
     }

@@ -6,30 +6,10 @@
 //! joint angles, and the side view has a frame every 0.1 s; `--json` prints
 //! the same object; `--record` writes one MCAP per episode; a pendulum run has returns only.
 
+mod common;
+
+use common::{esrl, ok_output as ok, read_json};
 use serde_json::Value;
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn esrl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args)
-        .output()
-        .expect("run esrl")
-}
-
-fn ok(args: &[&str]) -> Output {
-    let out = esrl(args);
-    assert!(
-        out.status.success(),
-        "esrl {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
-
-fn read_json(p: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
-}
 
 fn floats(v: &Value) -> Vec<f64> {
     v.as_array()

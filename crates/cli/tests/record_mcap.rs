@@ -9,24 +9,10 @@ use esrl_record::{
     FRAME_TRANSFORMS_SCHEMA, SCENE_TOPIC, SCENE_UPDATE_SCHEMA, TRANSFORMS_TOPIC,
 };
 use serde_json::Value;
-use std::process::{Command, Output};
 
-fn esrl(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args)
-        .output()
-        .expect("run esrl")
-}
+mod common;
 
-fn ok(args: &[&str]) -> Output {
-    let out = esrl(args);
-    assert!(
-        out.status.success(),
-        "esrl {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
-}
+use common::{esrl, ok_output as ok};
 
 const LINKS: [&str; 11] = [
     "torso",

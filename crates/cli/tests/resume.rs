@@ -2,46 +2,9 @@
 //! stop, `--resume` and two more — the same metrics rows and the same final weights; a run
 //! folder is never overwritten by a new run.
 
-use std::collections::BTreeMap;
-use std::path::Path;
+mod common;
 
-/// Every tensor of a safetensors file, by name (file bytes may differ in header order).
-fn tensors(path: &Path) -> BTreeMap<String, Vec<u32>> {
-    esrl_nn::load_tensors(path)
-        .unwrap()
-        .into_iter()
-        .map(|(k, t)| (k, t.data.iter().map(|x| x.to_bits()).collect()))
-        .collect()
-}
-use std::process::Command;
-
-fn esrl(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args)
-        .output()
-        .expect("run esrl")
-}
-
-fn ok(args: &[&str]) {
-    let out = esrl(args);
-    assert!(
-        out.status.success(),
-        "esrl {args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn rows(dir: &Path) -> Vec<serde_json::Value> {
-    std::fs::read_to_string(dir.join("metrics.jsonl"))
-        .unwrap()
-        .lines()
-        .map(|l| {
-            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
-            v.as_object_mut().unwrap().remove("wall_s");
-            v
-        })
-        .collect()
-}
+use common::{esrl, ok, rows, tensors};
 
 fn check_resume(agent: &str, extra: &[&str], budget_flag: &str) {
     let tmp = tempfile::tempdir().unwrap();

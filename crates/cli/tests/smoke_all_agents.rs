@@ -2,29 +2,16 @@
 //! folder: config.toml, metrics.jsonl and metrics.csv with one row per generation/episode,
 //! summary.json with the run-level metrics, and a loadable checkpoint.
 
-use std::process::Command;
+mod common;
+
+use common::smoke;
 
 #[test]
 fn every_agent_writes_a_complete_run_folder() {
     let tmp = tempfile::tempdir().unwrap();
     for agent in ["es-sac", "es-td3", "es-ddpg", "sac", "td3", "ddpg"] {
         let dir = tmp.path().join(agent);
-        let out = Command::new(env!("CARGO_BIN_EXE_esrl"))
-            .args([
-                "train",
-                agent,
-                "--preset",
-                "smoke",
-                "--out",
-                dir.to_str().unwrap(),
-            ])
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{agent}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        smoke(agent, &dir, &[]);
         for f in [
             "config.toml",
             "metrics.jsonl",

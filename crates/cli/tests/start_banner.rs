@@ -45,9 +45,9 @@ fn banner_names_the_run_budget_folder_and_how_to_stop() {
 #[test]
 fn default_run_folder_is_agent_and_seed() {
     let tmp = tempfile::tempdir().unwrap();
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .current_dir(tmp.path())
-        .args([
+    let out = common::esrl_in(
+        tmp.path(),
+        &[
             "train",
             "sac",
             "--preset",
@@ -56,9 +56,8 @@ fn default_run_folder_is_agent_and_seed() {
             "7",
             "--episodes",
             "1",
-        ])
-        .output()
-        .unwrap();
+        ],
+    );
     assert!(
         out.status.success(),
         "{}",
