@@ -10,6 +10,9 @@
 //! - [`WalkEnv`]: the walking task of the paper (SPEC §2) behind the [`Env`] trait, with the
 //!   observation, reward and episode documented in [`walk`]. [`Pendulum`] is Gymnasium's
 //!   `Pendulum-v1` behind the same trait. [`bench::bench_walk`] measures throughput.
+//! - [`run_episode`]: the one episode loop of esrl (reset, act, step until the episode ends),
+//!   with an [`EpisodeHook`] for what each caller needs: learning, keeping transitions, gait
+//!   samples, recording.
 //!
 //! ```
 //! use esrl_sim::{Env, WalkConfig, WalkEnv};
