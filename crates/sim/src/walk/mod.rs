@@ -295,7 +295,8 @@ impl WalkEnv {
 
     /// A name for every observation index, e.g. `joint_angle/left_knee`.
     pub fn obs_names(&self) -> Vec<String> {
-        observation::names(&self.shared)
+        let s = &self.shared;
+        observation::names(&s.model, &s.sources(), &s.config.foot_links)
     }
 
     /// World poses of every link frame (URDF link order).
@@ -388,12 +389,8 @@ impl WalkEnv {
     }
 
     fn observation(&self) -> Vec<f32> {
-        observation::observe(
-            &self.shared,
-            &self.sim,
-            &self.prev_action,
-            self.acceleration,
-        )
+        let sources = self.shared.sources();
+        observation::observe(&sources, &self.sim, &self.prev_action, self.acceleration)
     }
 }
 

@@ -6,8 +6,27 @@ use std::ops::Range;
 use rapier3d::prelude::Vector;
 use serde::Serialize;
 
-use super::setup::WalkShared;
+use crate::model::RobotModel;
 use crate::sim::RobotSim;
+
+/// What an observation reads, in its order: the torso, the actuated and passive joints, the
+/// feet, and the factor of each index.
+pub(super) struct Sources<'a> {
+    /// The torso link.
+    pub(super) torso: usize,
+    /// Torso origin height in the standing pose, m.
+    pub(super) standing_height: f64,
+    /// Actuated joints, in action order.
+    pub(super) actuated: &'a [usize],
+    /// Passive joints, in URDF order.
+    pub(super) passive: &'a [usize],
+    /// Left and right foot links.
+    pub(super) feet: [usize; 2],
+    /// Body weight, N (foot forces are divided by it).
+    pub(super) weight: f32,
+    /// Per-index factor.
+    pub(super) scale: &'a [f32],
+}
 
 /// Index ranges of the observation vector (see the module docs for units and frames).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
@@ -96,7 +115,7 @@ impl ObsLayout {
 /// entry multiplied by its scale factor. `acceleration` is the torso's world acceleration
 /// over the last control period, `previous_action` the clamped action of the last step.
 pub(super) fn observe(
-    s: &WalkShared,
+    s: &Sources,
     sim: &RobotSim,
     previous_action: &[f32],
     acceleration: Vector,
@@ -107,7 +126,7 @@ pub(super) fn observe(
     let w = inv * sim.link_angular_velocity(s.torso);
     let a = inv * acceleration;
     let q = pose.rotation;
-    let mut obs = Vec::with_capacity(s.layout.len);
+    let mut obs = Vec::with_capacity(s.scale.len());
     obs.push(pose.translation.z - s.standing_height as f32);
     obs.push(pose.translation.y);
     obs.extend([q.x, q.y, q.z, q.w]);
@@ -124,15 +143,15 @@ pub(super) fn observe(
             .map(|&f| sim.ground_normal_force(f) / s.weight),
     );
     obs.extend(previous_action.iter().copied());
-    for (o, f) in obs.iter_mut().zip(&s.obs_scale) {
+    for (o, f) in obs.iter_mut().zip(s.scale) {
         *o *= f;
     }
     obs
 }
 
 /// A name for every observation index, e.g. `joint_angle/left_knee`.
-pub(super) fn names(s: &WalkShared) -> Vec<String> {
-    let joint = |j: &usize| s.model.joints()[*j].name.clone();
+pub(super) fn names(model: &RobotModel, s: &Sources, foot_links: &[String]) -> Vec<String> {
+    let joint = |j: &usize| model.joints()[*j].name.clone();
     let mut names = vec!["height_error".to_owned(), "lateral_offset".to_owned()];
     names.extend(["x", "y", "z", "w"].map(|c| format!("orientation/{c}")));
     names.extend(["x", "y", "z"].map(|c| format!("linear_velocity/{c}")));
@@ -158,12 +177,7 @@ pub(super) fn names(s: &WalkShared) -> Vec<String> {
             .iter()
             .map(|j| format!("passive_velocity/{}", joint(j))),
     );
-    names.extend(
-        s.config
-            .foot_links
-            .iter()
-            .map(|f| format!("foot_force/{f}")),
-    );
+    names.extend(foot_links.iter().map(|f| format!("foot_force/{f}")));
     names.extend(
         s.actuated
             .iter()

@@ -8,7 +8,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 use super::config::{ActionMode, ResetConfig, ResetPose, WalkConfig};
-use super::observation::ObsLayout;
+use super::observation::{ObsLayout, Sources};
 use crate::error::{SimError, UrdfError};
 use crate::math::Iso;
 use crate::model::{JointKind, RobotModel};
@@ -116,6 +116,19 @@ impl WalkShared {
             layout,
             obs_scale,
         })
+    }
+
+    /// What the observation reads.
+    pub(super) fn sources(&self) -> Sources<'_> {
+        Sources {
+            torso: self.torso,
+            standing_height: self.standing_height,
+            actuated: &self.actuated,
+            passive: &self.passive,
+            feet: self.feet,
+            weight: self.weight,
+            scale: &self.obs_scale,
+        }
     }
 
     /// The standing pose at rest, feet on the ground.
