@@ -8,7 +8,7 @@
 
 mod common;
 
-use common::{esrl, ok_output as ok, read_json};
+use common::{esrl, ok_output as ok, read_json, smoke};
 use serde_json::Value;
 
 fn floats(v: &Value) -> Vec<f64> {
@@ -52,15 +52,7 @@ fn eval_json_has_every_field_and_agrees_with_its_trace() {
     let tmp = tempfile::tempdir().unwrap();
     let run = tmp.path().join("run");
     let r = run.to_str().unwrap();
-    ok(&[
-        "train",
-        "es-sac",
-        "--preset",
-        "smoke",
-        "--out",
-        r,
-        "--no-progress",
-    ]);
+    smoke("es-sac", &run, &[]);
     let rec = tmp.path().join("rec");
     let out = ok(&[
         "eval",
@@ -234,17 +226,7 @@ fn pendulum_eval_has_returns_only() {
     let tmp = tempfile::tempdir().unwrap();
     let run = tmp.path().join("p");
     let r = run.to_str().unwrap();
-    ok(&[
-        "train",
-        "sac",
-        "--env",
-        "pendulum",
-        "--preset",
-        "smoke",
-        "--out",
-        r,
-        "--no-progress",
-    ]);
+    smoke("sac", &run, &["--env", "pendulum"]);
     ok(&["eval", r, "--episodes", "2"]);
     let eval = read_json(&run.join("eval.json"));
     for e in eval["episodes"].as_array().unwrap() {

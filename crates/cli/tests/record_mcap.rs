@@ -12,7 +12,7 @@ use serde_json::Value;
 
 mod common;
 
-use common::{esrl, ok_output as ok};
+use common::{esrl, ok_output as ok, smoke};
 
 const LINKS: [&str; 11] = [
     "torso",
@@ -44,20 +44,11 @@ fn recording_reads_back_with_foxglove_schemas() {
     let tmp = tempfile::tempdir().unwrap();
     let run = tmp.path().join("run");
     let r = run.to_str().unwrap();
-    ok(&[
-        "train",
-        "td3",
-        "--preset",
-        "smoke",
-        "--out",
-        r,
-        "--no-progress",
-    ]);
+    smoke("td3", &run, &[]);
     let file = tmp.path().join("sub/rollout.mcap");
     ok(&["record", r, "--out", file.to_str().unwrap(), "--seed", "5"]);
     ok(&["eval", r, "--seed", "5"]);
-    let eval: Value =
-        serde_json::from_str(&std::fs::read_to_string(run.join("eval.json")).unwrap()).unwrap();
+    let eval = common::read_json(&run.join("eval.json"));
     let steps = eval["episodes"][0]["length"].as_u64().unwrap() as usize;
     assert!(steps > 0);
 
@@ -176,17 +167,7 @@ fn pendulum_runs_are_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let run = tmp.path().join("p");
     let r = run.to_str().unwrap();
-    ok(&[
-        "train",
-        "sac",
-        "--env",
-        "pendulum",
-        "--preset",
-        "smoke",
-        "--out",
-        r,
-        "--no-progress",
-    ]);
+    smoke("sac", &run, &["--env", "pendulum"]);
     let file = tmp.path().join("p.mcap");
     let out = esrl(&["record", r, "--out", file.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(1));

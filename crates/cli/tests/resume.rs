@@ -4,41 +4,17 @@
 
 mod common;
 
-use common::{esrl, ok, rows, tensors};
+use common::{esrl, ok, rows, smoke, tensors};
 
 fn check_resume(agent: &str, extra: &[&str], budget_flag: &str) {
     let tmp = tempfile::tempdir().unwrap();
     let (straight, split) = (tmp.path().join("straight"), tmp.path().join("split"));
-    let s = straight.to_str().unwrap();
     let p = split.to_str().unwrap();
-    let mut a = vec![
-        "train",
-        agent,
-        "--preset",
-        "smoke",
-        "--seed",
-        "2",
-        budget_flag,
-        "4",
-        "--out",
-        s,
-    ];
-    a.extend_from_slice(extra);
-    ok(&a);
-    let mut b = vec![
-        "train",
-        agent,
-        "--preset",
-        "smoke",
-        "--seed",
-        "2",
-        budget_flag,
-        "2",
-        "--out",
-        p,
-    ];
-    b.extend_from_slice(extra);
-    ok(&b);
+    for (dir, budget) in [(&straight, "4"), (&split, "2")] {
+        let mut flags = vec!["--seed", "2", budget_flag, budget];
+        flags.extend_from_slice(extra);
+        smoke(agent, dir, &flags);
+    }
     ok(&["train", agent, "--resume", p, budget_flag, "4"]);
     assert_eq!(rows(&straight).len(), 4);
     assert_eq!(
