@@ -14,20 +14,11 @@ fn best_folder_holds_the_policy_that_scored_the_best_curve_value() {
     let tmp = tempfile::tempdir().unwrap();
     let run = tmp.path().join("run");
     let run_s = run.to_str().unwrap();
-    esrl(&[
-        "train",
+    common::smoke(
         "es-td3",
-        "--preset",
-        "smoke",
-        "--seed",
-        "3",
-        "--generations",
-        "6",
-        "--threads",
-        "1",
-        "--out",
-        run_s,
-    ]);
+        &run,
+        &["--seed", "3", "--generations", "6", "--threads", "1"],
+    );
 
     let curve = curve(&run);
     assert_eq!(curve.len(), 6);

@@ -5,23 +5,14 @@
 
 mod common;
 
-use common::{esrl, fails, ok, rows};
+use common::{esrl, fails, ok, rows, smoke};
 
 #[test]
 fn resume_refuses_seed_env_and_urdf() {
     let tmp = tempfile::tempdir().unwrap();
     let run = tmp.path().join("run");
     let r = run.to_str().unwrap();
-    ok(&[
-        "train",
-        "sac",
-        "--preset",
-        "smoke",
-        "--episodes",
-        "1",
-        "--out",
-        r,
-    ]);
+    smoke("sac", &run, &["--episodes", "1"]);
     for flag in [["--seed", "5"], ["--env", "pendulum"], ["--urdf", "x.urdf"]] {
         let out = esrl(&["train", "sac", "--resume", r, flag[0], flag[1]]);
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -35,18 +26,7 @@ fn raising_the_budget_on_resume_updates_config_toml() {
     let tmp = tempfile::tempdir().unwrap();
     let (run, again) = (tmp.path().join("run"), tmp.path().join("again"));
     let r = run.to_str().unwrap();
-    ok(&[
-        "train",
-        "es-td3",
-        "--preset",
-        "smoke",
-        "--seed",
-        "3",
-        "--generations",
-        "2",
-        "--out",
-        r,
-    ]);
+    smoke("es-td3", &run, &["--seed", "3", "--generations", "2"]);
     ok(&["train", "es-td3", "--resume", r, "--generations", "3"]);
     let text = std::fs::read_to_string(run.join("config.toml")).unwrap();
     assert!(text.contains("generations = 3"), "{text}");
