@@ -23,10 +23,12 @@ pub trait Row: Serialize {
     fn summary(&self) -> String;
 }
 
-/// The counters and random streams of the RL side of every learner, as `state.json` keeps
-/// them; weights and the replay buffer are saved apart.
+/// A learner's counters and random streams, as `state.json` keeps them: the RL side's, which
+/// every learner has, and the learner's own (`own`: nothing for a plain trainer, the loop's
+/// counters for the hybrid one), whose fields stand beside these in the file. Weights and the
+/// replay buffer are saved apart.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct TrainerState {
+pub struct LearnerState<S = ()> {
     /// Training episodes completed (plain agents).
     pub episodes: usize,
     /// Environment steps taken.
@@ -39,25 +41,44 @@ pub struct TrainerState {
     pub agent_rng: ChaCha8Rng,
     /// Whether the replay buffer's last episode is still open.
     pub episode_open: bool,
+    /// The learner's own counters. (Serde reads a flattened part through a buffer that
+    /// cannot hold the streams' 128-bit counters, so the streams stay out here.)
+    #[serde(flatten)]
+    pub own: S,
 }
 
-/// What every learner's saved state tells: a flat, serialisable record (its fields become
-/// keys of `state.json`; no field may be a flattened struct, as serde cannot read a
-/// flattened random stream back).
-pub trait LearnerState: Serialize + DeserializeOwned + Clone {
-    /// Environment steps taken.
-    fn env_steps(&self) -> u64;
-    /// Whether the replay buffer's last episode is still open.
-    fn episode_open(&self) -> bool;
-}
+/// The RL side's state alone: a plain trainer's.
+pub type TrainerState = LearnerState<()>;
 
-impl LearnerState for TrainerState {
-    fn env_steps(&self) -> u64 {
-        self.env_steps
+impl<S> LearnerState<S> {
+    /// The RL side's state, and the learner's own part.
+    pub fn split(self) -> (TrainerState, S) {
+        let own = self.own;
+        let rl = LearnerState {
+            episodes: self.episodes,
+            env_steps: self.env_steps,
+            trainer_rng: self.trainer_rng,
+            agent_updates: self.agent_updates,
+            agent_rng: self.agent_rng,
+            episode_open: self.episode_open,
+            own: (),
+        };
+        (rl, own)
     }
+}
 
-    fn episode_open(&self) -> bool {
-        self.episode_open
+impl TrainerState {
+    /// This state with the learner's own part `own`.
+    pub fn with<S>(self, own: S) -> LearnerState<S> {
+        LearnerState {
+            episodes: self.episodes,
+            env_steps: self.env_steps,
+            trainer_rng: self.trainer_rng,
+            agent_updates: self.agent_updates,
+            agent_rng: self.agent_rng,
+            episode_open: self.episode_open,
+            own,
+        }
     }
 }
 
@@ -70,8 +91,8 @@ impl LearnerState for TrainerState {
 pub trait Learner {
     /// One row of the metrics.
     type Row: Row;
-    /// Counters and random streams.
-    type State: LearnerState;
+    /// The learner's own counters, beside the RL side's in [`LearnerState`].
+    type Own: Serialize + DeserializeOwned + Clone;
     /// What a row is: `"episode"` or `"generation"`.
     const UNIT: &'static str;
 
@@ -103,12 +124,12 @@ pub trait Learner {
     }
 
     /// Run-level figures for `summary.json` beyond the curve's, by name.
-    fn summary(&self) -> Vec<(&'static str, Option<f64>)> {
+    fn summary_figures(&self) -> Vec<(&'static str, Option<f64>)> {
         Vec::new()
     }
 
     /// Counters and random streams.
-    fn state(&self) -> Self::State;
+    fn state(&self) -> LearnerState<Self::Own>;
 
     /// Every tensor: the agent's (networks, targets, optimiser moments, log α) and the
     /// learner's own (the ES mean).
@@ -116,12 +137,12 @@ pub trait Learner {
 
     /// Checks a saved state against this learner's configuration and the `rows` the
     /// checkpoint covers, before anything is restored; the error names the field.
-    fn check(&self, state: &Self::State, rows: usize) -> Result<(), AgentError>;
+    fn check(&self, state: &LearnerState<Self::Own>, rows: usize) -> Result<(), AgentError>;
 
     /// Restores a saved state, its tensors and its replay buffer.
     fn restore(
         &mut self,
-        state: Self::State,
+        state: LearnerState<Self::Own>,
         tensors: &HashMap<String, Vec<f32>>,
         buffer: ReplayBuffer,
     ) -> Result<(), AgentError>;

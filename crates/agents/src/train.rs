@@ -270,6 +270,7 @@ impl Trainer {
             agent_updates,
             agent_rng,
             episode_open: self.buffer.episode_open(),
+            own: (),
         }
     }
 
@@ -344,7 +345,7 @@ impl<E: Env + ?Sized> EpisodeHook<E> for Learning<'_> {
 
 impl Learner for Trainer {
     type Row = EpisodeReport;
-    type State = TrainerState;
+    type Own = ();
     const UNIT: &'static str = "episode";
 
     fn run_row(&mut self, envs: &MakeEnv) -> Result<EpisodeReport, AgentError> {

@@ -35,11 +35,10 @@
 
 use crate::evaluate::{Evaluation, Evaluator, Generation, Genome, RolloutSpec};
 use crate::strategy::{rank, EsConfig, Fitness, LoopOrder, Strategy};
-use esrl_agents::learner::{Learner, LearnerState, Row, TrainerState};
+use esrl_agents::learner::{Learner, LearnerState, Row};
 use esrl_agents::{ActMode, Agent, AgentError, ReplayBuffer, Trainer};
 use esrl_sim::MakeEnv;
 use esrl_streams::Stream;
-use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -156,23 +155,10 @@ impl LoopStats {
     }
 }
 
-/// The counters and streams of a hybrid run (`state.json`): the RL side's
-/// ([`TrainerState`], whose fields it repeats so that the file stays flat: serde cannot read
-/// a flattened random stream back), and the loop's.
+/// The hybrid loop's own counters, beside the RL side's in `state.json`
+/// ([`LearnerState<EsState>`](LearnerState)).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct HybridState {
-    /// Always 0: the hybrid loop runs generations, not training episodes.
-    pub episodes: usize,
-    /// Environment steps taken.
-    pub env_steps: u64,
-    /// The trainer's random stream.
-    pub trainer_rng: ChaCha8Rng,
-    /// Gradient updates done.
-    pub agent_updates: u64,
-    /// The agent's random stream.
-    pub agent_rng: ChaCha8Rng,
-    /// Whether the replay buffer's last episode is still open.
-    pub episode_open: bool,
+pub struct EsState {
     /// Generations completed.
     pub generations: usize,
     /// ES σ.
@@ -186,30 +172,6 @@ pub struct HybridState {
     /// The loop's counts so far (absent in older checkpoints).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub loop_stats: Option<LoopStats>,
-}
-
-impl HybridState {
-    /// The RL side's part.
-    pub fn trainer(&self) -> TrainerState {
-        TrainerState {
-            episodes: self.episodes,
-            env_steps: self.env_steps,
-            trainer_rng: self.trainer_rng.clone(),
-            agent_updates: self.agent_updates,
-            agent_rng: self.agent_rng.clone(),
-            episode_open: self.episode_open,
-        }
-    }
-}
-
-impl LearnerState for HybridState {
-    fn env_steps(&self) -> u64 {
-        self.env_steps
-    }
-
-    fn episode_open(&self) -> bool {
-        self.episode_open
-    }
 }
 
 /// The hybrid learner: an RL trainer (agent + buffer), the ES distribution, and the
@@ -488,7 +450,7 @@ impl Hybrid {
 
 impl Learner for Hybrid {
     type Row = GenerationReport;
-    type State = HybridState;
+    type Own = EsState;
     const UNIT: &'static str = "generation";
 
     /// The warm start, from one environment of `envs`.
@@ -530,7 +492,7 @@ impl Learner for Hybrid {
         Ok(Some(agent))
     }
 
-    fn summary(&self) -> Vec<(&'static str, Option<f64>)> {
+    fn summary_figures(&self) -> Vec<(&'static str, Option<f64>)> {
         vec![
             ("rl_trained_best_share", self.stats.trained_best_share()),
             ("rl_trained_elite_share", self.stats.trained_elite_share()),
@@ -538,21 +500,14 @@ impl Learner for Hybrid {
         ]
     }
 
-    fn state(&self) -> HybridState {
-        let t = self.trainer.state();
-        HybridState {
-            episodes: t.episodes,
-            env_steps: t.env_steps,
-            trainer_rng: t.trainer_rng,
-            agent_updates: t.agent_updates,
-            agent_rng: t.agent_rng,
-            episode_open: t.episode_open,
+    fn state(&self) -> LearnerState<EsState> {
+        self.trainer.state().with(EsState {
             generations: self.generation,
             sigma: Some(self.strategy.sigma),
             es_generation: Some(self.strategy.generation),
             rl_trained: Some(self.rl_trained),
             loop_stats: Some(self.stats.clone()),
-        }
+        })
     }
 
     fn tensors(&self) -> Vec<(String, Vec<f32>)> {
@@ -563,7 +518,8 @@ impl Learner for Hybrid {
 
     /// Refuses a state whose generation count is not `rows`, whose σ lies outside the range
     /// eq. 11 keeps it in, or whose ES generation counter disagrees.
-    fn check(&self, state: &HybridState, rows: usize) -> Result<(), AgentError> {
+    fn check(&self, state: &LearnerState<EsState>, rows: usize) -> Result<(), AgentError> {
+        let state = &state.own;
         let bad = |field: &str, reason: String| {
             Err(AgentError::State {
                 field: field.into(),
@@ -603,7 +559,7 @@ impl Learner for Hybrid {
 
     fn restore(
         &mut self,
-        state: HybridState,
+        state: LearnerState<EsState>,
         tensors: &HashMap<String, Vec<f32>>,
         buffer: ReplayBuffer,
     ) -> Result<(), AgentError> {
@@ -621,7 +577,8 @@ impl Learner for Hybrid {
                 ),
             });
         }
-        self.trainer.restore(state.trainer(), tensors, buffer)?;
+        let (rl, state) = state.split();
+        self.trainer.restore(rl, tensors, buffer)?;
         self.strategy.mean.clone_from(mean);
         self.strategy.sigma = state.sigma.unwrap_or(self.strategy.sigma);
         self.strategy.generation = state.es_generation.unwrap_or(0);

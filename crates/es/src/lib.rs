@@ -53,5 +53,5 @@ pub mod strategy;
 pub use evaluate::{
     rollout_genome, Evaluation, Evaluator, Generation, Genome, LocalEvaluator, RolloutSpec,
 };
-pub use hybrid::{GenerationReport, Hybrid, HybridState, LoopStats};
+pub use hybrid::{EsState, GenerationReport, Hybrid, LoopStats};
 pub use strategy::{elite_weights, rank, ConfigError, EsConfig, Fitness, LoopOrder, Strategy};

@@ -6,8 +6,8 @@
 mod common;
 
 use common::hybrid;
-use esrl_agents::{Algo, Learner};
-use esrl_es::{EsConfig, HybridState};
+use esrl_agents::{Algo, Learner, LearnerState};
+use esrl_es::{EsConfig, EsState};
 use std::collections::HashMap;
 
 #[test]
@@ -22,7 +22,7 @@ fn restored_hybrid_continues_bit_for_bit() {
         let buffer = original.buffer().clone();
 
         let mut restored = hybrid(algo, EsConfig::default(), 3);
-        let state: HybridState = serde_json::from_str(&state).unwrap();
+        let state: LearnerState<EsState> = serde_json::from_str(&state).unwrap();
         restored.restore(state, &tensors, buffer).unwrap();
         assert_eq!(restored.rows(), 3);
         for g in 3..6 {

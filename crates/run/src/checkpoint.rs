@@ -45,6 +45,7 @@ use crate::error::{Context, Result};
 use crate::run_dir::{write_atomic, write_json_atomic, RunDir};
 use esrl_agents::{Agent, Learner, LearnerState, ReplayBuffer};
 use esrl_nn::{load_tensors, save_params, save_tensors, Module, NamedTensor};
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use std::collections::{BTreeMap, HashMap};
@@ -410,7 +411,7 @@ pub fn check_state<L: Learner>(
     dir: &Path,
     learner: &L,
     state: &RunState,
-    learner_state: &L::State,
+    learner_state: &LearnerState<L::Own>,
 ) -> Result<()> {
     let p = dir.join("state.json");
     let bad = |field: &str, why: String| -> Result<()> {
@@ -440,7 +441,7 @@ pub fn check_state<L: Learner>(
     {
         return bad(&field, reason);
     }
-    let env_steps = learner_state.env_steps();
+    let env_steps = learner_state.env_steps;
     if let Some(log) = &state.replay {
         if log.pushed != env_steps {
             return bad(
@@ -491,7 +492,7 @@ fn read_run_state(dir: &Path) -> Result<RunState> {
 
 /// Reads `state.json` of a checkpoint folder, after checking the folder against its
 /// manifest: the run's part and the learner's.
-pub fn load_state<S: LearnerState>(dir: &Path) -> Result<(RunState, S)> {
+pub fn load_state<S: DeserializeOwned>(dir: &Path) -> Result<(RunState, LearnerState<S>)> {
     verify_manifest(dir)?;
     let p = dir.join("state.json");
     let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
@@ -504,7 +505,7 @@ pub fn load_state<S: LearnerState>(dir: &Path) -> Result<(RunState, S)> {
             state.version
         );
     }
-    let learner: S =
+    let learner: LearnerState<S> =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
     Ok((state, learner))
 }
@@ -595,10 +596,10 @@ pub fn restore<L: Learner>(
     dir: &Path,
     learner: &mut L,
     state: &RunState,
-    learner_state: L::State,
+    learner_state: LearnerState<L::Own>,
 ) -> Result<()> {
     let tensors = read_tensors(dir)?;
-    let buffer = read_buffer(dir, state, learner.agent(), learner_state.episode_open())?;
+    let buffer = read_buffer(dir, state, learner.agent(), learner_state.episode_open)?;
     let p = dir.join("agent.safetensors");
     learner
         .restore(learner_state, &tensors, buffer)

@@ -33,7 +33,7 @@ pub struct Summary {
     pub wall_s: f64,
     /// Whether the configured budget was completed.
     pub finished: bool,
-    /// The learner's own figures ([`esrl_agents::Learner::summary`]); for ES-X the shares of
+    /// The learner's own figures ([`esrl_agents::Learner::summary_figures`]); for ES-X the shares of
     /// trained generations whose actor was best (`rl_trained_best_share`) or an elite
     /// (`rl_trained_elite_share`), and of generations that replaced it (`rl_replaced_share`).
     #[serde(flatten)]

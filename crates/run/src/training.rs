@@ -77,10 +77,10 @@ impl<L: Learner> Training<L> {
         let mut state = RunState::fresh();
         let (run, opening) = match (resume, checkpoint::find(root)) {
             (true, Some(dir)) => {
-                let (run_state, learner_state) = checkpoint::load_state::<L::State>(&dir)?;
+                let (run_state, learner_state) = checkpoint::load_state::<L::Own>(&dir)?;
                 checkpoint::check_config(&dir, &run_state, cfg)?;
                 checkpoint::check_state(root, &dir, &learner, &run_state, &learner_state)?;
-                let env_steps = esrl_agents::LearnerState::env_steps(&learner_state);
+                let env_steps = learner_state.env_steps;
                 checkpoint::restore(&dir, &mut learner, &run_state, learner_state)?;
                 state = run_state;
                 let run = RunDir::resume(root, state.rows)?;
@@ -231,7 +231,7 @@ impl<L: Learner> Training<L> {
             return Ok(());
         }
         let mut learner = Map::new();
-        for (name, value) in self.learner.summary() {
+        for (name, value) in self.learner.summary_figures() {
             if let Some(v) = value {
                 learner.insert(name.into(), Value::from(v));
             }
