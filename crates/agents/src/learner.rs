@@ -51,34 +51,27 @@ pub struct LearnerState<S = ()> {
 pub type TrainerState = LearnerState<()>;
 
 impl<S> LearnerState<S> {
-    /// The RL side's state, and the learner's own part.
-    pub fn split(self) -> (TrainerState, S) {
-        let own = self.own;
-        let rl = LearnerState {
-            episodes: self.episodes,
-            env_steps: self.env_steps,
-            trainer_rng: self.trainer_rng,
-            agent_updates: self.agent_updates,
-            agent_rng: self.agent_rng,
-            episode_open: self.episode_open,
-            own: (),
-        };
-        (rl, own)
-    }
-}
-
-impl TrainerState {
-    /// This state with the learner's own part `own`.
-    pub fn with<S>(self, own: S) -> LearnerState<S> {
-        LearnerState {
-            episodes: self.episodes,
-            env_steps: self.env_steps,
-            trainer_rng: self.trainer_rng,
-            agent_updates: self.agent_updates,
-            agent_rng: self.agent_rng,
-            episode_open: self.episode_open,
+    /// This state with `own` as the learner's own part, and the part it had.
+    pub fn replace_own<T>(self, own: T) -> (LearnerState<T>, S) {
+        let Self {
+            episodes,
+            env_steps,
+            trainer_rng,
+            agent_updates,
+            agent_rng,
+            episode_open,
+            own: old,
+        } = self;
+        let state = LearnerState {
+            episodes,
+            env_steps,
+            trainer_rng,
+            agent_updates,
+            agent_rng,
+            episode_open,
             own,
-        }
+        };
+        (state, old)
     }
 }
 

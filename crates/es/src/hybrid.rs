@@ -501,13 +501,14 @@ impl Learner for Hybrid {
     }
 
     fn state(&self) -> LearnerState<EsState> {
-        self.trainer.state().with(EsState {
+        let es = EsState {
             generations: self.generation,
             sigma: Some(self.strategy.sigma),
             es_generation: Some(self.strategy.generation),
             rl_trained: Some(self.rl_trained),
             loop_stats: Some(self.stats.clone()),
-        })
+        };
+        self.trainer.state().replace_own(es).0
     }
 
     fn tensors(&self) -> Vec<(String, Vec<f32>)> {
@@ -577,7 +578,7 @@ impl Learner for Hybrid {
                 ),
             });
         }
-        let (rl, state) = state.split();
+        let (rl, state) = state.replace_own(());
         self.trainer.restore(rl, tensors, buffer)?;
         self.strategy.mean.clone_from(mean);
         self.strategy.sigma = state.sigma.unwrap_or(self.strategy.sigma);
