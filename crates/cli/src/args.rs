@@ -99,7 +99,7 @@ pub enum EnvKind {
 pub enum Preset {
     /// The paper's numbers: N = 25, σ = 0.25, 50 inner cycles, 1500 generations/episodes.
     Paper,
-    /// Visible learning on a 2-core machine in about 30 minutes.
+    /// Visible learning on a 2-core machine: about 3 minutes for ES-SAC (150 generations).
     Quick,
     /// `quick` with 5× the gradient updates per generation and 895 generations: the ES-SAC
     /// run (seed 0) that stays up 60 s, about 75 minutes on one core.

@@ -33,6 +33,11 @@ pub struct TrainConfig {
     pub max_env_steps: Option<u64>,
     /// Gradient updates per ES generation (the inner training cycles). Paper: 50.
     pub inner_cycles: usize,
+    /// ES-X: when set, the inner cycles of each generation are this many per environment
+    /// step it collected (the update-to-data ratio), replacing `inner_cycles`. Default none
+    /// (the paper's fixed count).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub updates_per_step: Option<f64>,
     /// Write a checkpoint every this many generations/episodes (and at the end).
     pub checkpoint_every: usize,
     /// The walking environment.
@@ -58,6 +63,7 @@ impl TrainConfig {
             episodes: 1500,
             max_env_steps: None,
             inner_cycles: 50,
+            updates_per_step: None,
             checkpoint_every: 10,
             walk: WalkConfig::default(),
             network: NetConfig::default(),
@@ -221,6 +227,11 @@ impl TrainConfig {
                 "episodes = {}: at most {MAX_ROWS} (the paper runs 1500)",
                 self.episodes
             );
+        }
+        if let Some(r) = self.updates_per_step {
+            if !(r.is_finite() && r > 0.0 && r <= 64.0) {
+                bail!("updates_per_step = {r}: must be in (0, 64]");
+            }
         }
         if self.max_env_steps == Some(0) {
             bail!("max_env_steps = 0 (--steps 0): the budget must allow at least one step");

@@ -73,12 +73,9 @@ pub fn build_learner(cfg: &TrainConfig, make_env: &EnvFactory) -> Result<Learner
         cfg.seed,
     )?;
     Ok(if cfg.agent.is_hybrid() {
-        Learner::Hybrid(Box::new(Hybrid::new(
-            agent,
-            cfg.es.clone(),
-            cfg.inner_cycles,
-            cfg.seed,
-        )))
+        let mut hybrid = Hybrid::new(agent, cfg.es.clone(), cfg.inner_cycles, cfg.seed);
+        hybrid.updates_per_step = cfg.updates_per_step;
+        Learner::Hybrid(Box::new(hybrid))
     } else {
         Learner::Plain(Box::new(Trainer::new(agent, cfg.seed)))
     })
@@ -229,9 +226,13 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
         EnvKind::Pendulum => "pendulum",
     };
     let budget = if cfg.agent.is_hybrid() {
+        let updates = match cfg.updates_per_step {
+            Some(r) => format!("{r} updates per env step"),
+            None => format!("{} inner cycles per generation", cfg.inner_cycles),
+        };
         format!(
-            "{} generations × {} individuals × {} rollout(s), {} inner cycles per generation",
-            cfg.generations, cfg.es.population, cfg.es.evaluations, cfg.inner_cycles
+            "{} generations × {} individuals × {} rollout(s), {updates}",
+            cfg.generations, cfg.es.population, cfg.es.evaluations
         )
     } else {
         format!("{} episodes", cfg.episodes)

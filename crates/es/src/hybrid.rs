@@ -139,6 +139,10 @@ pub struct Hybrid {
     pub es: EsConfig,
     /// Gradient updates per generation.
     pub inner_cycles: usize,
+    /// When set, the inner cycles of a generation are this many per environment step the
+    /// generation collected (rounded), instead of [`Hybrid::inner_cycles`]: the update-to-data
+    /// ratio stays fixed as episodes lengthen.
+    pub updates_per_step: Option<f64>,
     /// Generations completed.
     pub generation: usize,
     /// The genome of the last generation's best individual: the policy whose fitness is that
@@ -169,6 +173,7 @@ impl Hybrid {
             strategy,
             es,
             inner_cycles,
+            updates_per_step: None,
             generation: 0,
             kept: Vec::new(),
             rl_trained: false,
@@ -275,11 +280,16 @@ impl Hybrid {
         evaluated.into_iter().collect()
     }
 
-    /// The inner training cycles (step 5), once the warm start is in the buffer.
-    fn train(&mut self) -> Result<LossMeans, AgentError> {
+    /// The inner training cycles (step 5), once the warm start is in the buffer: `steps` is
+    /// what the generation collected.
+    fn train(&mut self, steps: usize) -> Result<LossMeans, AgentError> {
         let mut losses = LossMeans::default();
+        let cycles = match self.updates_per_step {
+            Some(ratio) => (ratio * steps as f64).round() as usize,
+            None => self.inner_cycles,
+        };
         if self.trainer.env_steps >= self.trainer.agent.config().warm_start as u64 {
-            for _ in 0..self.inner_cycles {
+            for _ in 0..cycles {
                 losses.add(&self.trainer.update()?);
             }
         }
@@ -323,10 +333,10 @@ impl Hybrid {
                 if replaced {
                     self.trainer.agent.set_genome(&genomes[best])?;
                 }
-                self.train()?
+                self.train(steps)?
             }
             LoopOrder::TrainThenReplace => {
-                let losses = self.train()?;
+                let losses = self.train(steps)?;
                 if replaced {
                     self.trainer.agent.set_genome(&genomes[best])?;
                 }

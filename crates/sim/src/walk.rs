@@ -309,6 +309,12 @@ pub struct TargetGains {
     pub stiffness: f32,
     /// Damping `kd`, N·m·s/rad. Default 60 (module docs, "Action").
     pub damping: f32,
+    /// When set, the targets span the standing angle ± this many radians (`q* = q_stand +
+    /// a·range`, clamped to the joint's limits) instead of reaching the limits at ±1: a
+    /// residual around standing, so an untrained policy's actions do not throw the legs
+    /// across their whole range. Default none (±1 reach the limits).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub range: Option<f32>,
 }
 
 impl Default for TargetGains {
@@ -316,7 +322,71 @@ impl Default for TargetGains {
         Self {
             stiffness: 1500.0,
             damping: 60.0,
+            range: None,
         }
+    }
+}
+
+/// A gait clock ([`WalkConfig::gait_clock`]): a phase φ that advances at one cycle per
+/// `period` seconds, given to the policy as (sin 2πφ, cos 2πφ) at the end of the observation,
+/// and a reward for foot contacts that follow it (the periodic reward composition of
+/// Siekmann et al., "Sim-to-real learning of all common bipedal gaits via periodic reward
+/// composition", ICRA 2021, reduced to contact).
+///
+/// The left foot is meant to be down for φ ∈ [0, duty), the right foot for (φ + ½) mod 1 ∈
+/// [0, duty): with `duty` > ½ the feet alternate with two double-support phases of
+/// `duty − ½` each. Each step pays `reward · (m_L + m_R)/2`, with `m` = +1 for a foot whose
+/// contact (normal force above `contact_force`) matches its phase and −1 otherwise. The
+/// phase starts at a value drawn from the reset seed, so the policy meets every phase at
+/// reset.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GaitClock {
+    /// Seconds per gait cycle (stride). Default 1.0 (adult walking at 1.2–1.4 m/s: cadence
+    /// ≈ 110 steps/min, a stride of ≈ 1.1 s; Perry & Burnfield, *Gait Analysis*).
+    pub period: f32,
+    /// Share of the cycle each foot is meant to be down. Default 0.6 (stance 60 % of the
+    /// cycle at normal walking speed, double support 2 × 10 %; Perry & Burnfield).
+    pub duty: f32,
+    /// Reward per step for contacts that follow the clock. Default 0.5 (esrl's choice: of the
+    /// order of the forward term at a walking speed).
+    pub reward: f32,
+    /// Normal force above which a foot counts as down, N. Default 10 (the gait metrics'
+    /// threshold, `esrl_metrics::GaitThresholds`).
+    pub contact_force: f32,
+}
+
+impl Default for GaitClock {
+    fn default() -> Self {
+        Self {
+            period: 1.0,
+            duty: 0.6,
+            reward: 0.5,
+            contact_force: 10.0,
+        }
+    }
+}
+
+impl GaitClock {
+    /// Whether each foot (left, right) is meant to be down at phase `phi` ∈ [0, 1).
+    pub fn stance(&self, phi: f32) -> [bool; 2] {
+        let right = (phi + 0.5).rem_euclid(1.0);
+        [phi.rem_euclid(1.0) < self.duty, right < self.duty]
+    }
+
+    /// The clock's reward for the feet's normal forces at phase `phi`.
+    pub fn contact_reward(&self, phi: f32, foot_force: [f32; 2]) -> f32 {
+        let want = self.stance(phi);
+        let matched: f32 = (0..2)
+            .map(|i| {
+                if (foot_force[i] > self.contact_force) == want[i] {
+                    1.0
+                } else {
+                    -1.0
+                }
+            })
+            .sum();
+        self.reward * matched / 2.0
     }
 }
 
@@ -367,6 +437,11 @@ pub struct WalkConfig {
     pub action: ActionMode,
     /// Servo gains of the `target` action mode.
     pub target: TargetGains,
+    /// Optional gait clock: phase features at the end of the observation and a reward for
+    /// contacts that follow them ([`GaitClock`]). Default none (the paper's observation and
+    /// reward).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gait_clock: Option<GaitClock>,
     /// Multiply the observation by the fixed per-quantity factors of the module docs
     /// ([`WalkEnv::obs_scale`]) so every entry is of order one. Default true (esrl's choice:
     /// the raw values span three orders of magnitude, accelerations reach 160 m/s²).
@@ -405,6 +480,7 @@ impl Default for WalkConfig {
             reset: ResetConfig::default(),
             action: ActionMode::Torque,
             target: TargetGains::default(),
+            gait_clock: None,
             normalize_obs: true,
             actuated_joints: [
                 "left_hip",
@@ -488,6 +564,21 @@ impl WalkConfig {
         nonneg("reset.split", self.reset.split)?;
         nonneg("target.stiffness", self.target.stiffness)?;
         nonneg("target.damping", self.target.damping)?;
+        if let Some(r) = self.target.range {
+            pos("target.range", r)?;
+        }
+        if let Some(c) = &self.gait_clock {
+            pos("gait_clock.period", c.period)?;
+            if !(c.duty > 0.0 && c.duty < 1.0) {
+                return Err(config_err(
+                    "gait_clock.duty",
+                    c.duty.to_string(),
+                    "must be in (0, 1)",
+                ));
+            }
+            fin("gait_clock.reward", c.reward)?;
+            nonneg("gait_clock.contact_force", c.contact_force)?;
+        }
         nonneg("init_noise.joint_angle", self.init_noise.joint_angle)?;
         nonneg("init_noise.joint_velocity", self.init_noise.joint_velocity)?;
         if self.actuated_joints.is_empty() {
@@ -539,12 +630,14 @@ pub struct ObsLayout {
     pub foot_forces: Range<usize>,
     /// Previous action.
     pub previous_action: Range<usize>,
+    /// Gait clock (sin 2πφ, cos 2πφ), when [`WalkConfig::gait_clock`] is set.
+    pub clock: Option<Range<usize>>,
     /// Total length.
     pub len: usize,
 }
 
 impl ObsLayout {
-    fn new(n_a: usize, n_p: usize) -> Self {
+    fn new(n_a: usize, n_p: usize, clock: bool) -> Self {
         let mut at = 2;
         let mut take = |n: usize| {
             let r = at..at + n;
@@ -561,6 +654,7 @@ impl ObsLayout {
         let passive_velocities = take(n_p);
         let foot_forces = take(2);
         let previous_action = take(n_a);
+        let clock = clock.then(|| take(2));
         Self {
             height_error: 0,
             lateral_offset: 1,
@@ -574,6 +668,7 @@ impl ObsLayout {
             passive_velocities,
             foot_forces,
             previous_action,
+            clock,
             len: at,
         }
     }
@@ -631,6 +726,8 @@ pub struct WalkEnv {
     last_torque: Vec<f32>,
     last_power: Vec<f32>,
     last_abs_power: Vec<f32>,
+    /// Gait-clock phase at reset, drawn from the reset seed (0 without a clock).
+    phase0: f32,
 }
 
 impl WalkEnv {
@@ -774,7 +871,7 @@ impl WalkEnv {
             });
         }
         let weight = (model.total_mass() * config.physics.gravity as f64) as f32;
-        let layout = ObsLayout::new(actuated.len(), passive.len());
+        let layout = ObsLayout::new(actuated.len(), passive.len(), config.gait_clock.is_some());
         let obs_scale = if config.normalize_obs {
             layout.scale()
         } else {
@@ -814,6 +911,7 @@ impl WalkEnv {
             last_torque: vec![0.0; n_a],
             last_power: vec![0.0; n_a],
             last_abs_power: vec![0.0; n_a],
+            phase0: 0.0,
         })
     }
 
@@ -838,6 +936,7 @@ impl WalkEnv {
             last_torque: vec![0.0; n_a],
             last_power: vec![0.0; n_a],
             last_abs_power: vec![0.0; n_a],
+            phase0: 0.0,
         }
     }
 
@@ -979,9 +1078,20 @@ impl WalkEnv {
         self.steps
     }
 
+    /// The gait-clock phase φ ∈ [0, 1) now ([`GaitClock`]; 0 without a clock).
+    pub fn phase(&self) -> f32 {
+        match &self.shared.config.gait_clock {
+            Some(c) => {
+                let t = self.steps as f32 * self.shared.config.control_period;
+                (self.phase0 + t / c.period).rem_euclid(1.0)
+            }
+            None => 0.0,
+        }
+    }
+
     /// The joint angle target of actuated joint `k` for action `a` in `target` mode (module
     /// docs, "Action"): the standing angle at 0, the joint's limits at ±1, linear in between
-    /// on each side.
+    /// on each side; with [`TargetGains::range`], `q_stand + a·range` clamped to the limits.
     pub fn target_angle(&self, k: usize, a: f32) -> f32 {
         let s = &self.shared;
         let stand = s.standing_q[s.actuated[k]] as f32;
@@ -991,6 +1101,9 @@ impl WalkEnv {
         } else {
             0.0
         };
+        if let Some(range) = self.config().target.range {
+            return (stand + a * range).clamp(lo, hi);
+        }
         if a >= 0.0 {
             stand + a * (hi - stand)
         } else {
@@ -1023,6 +1136,10 @@ impl WalkEnv {
                 .map(|&f| self.sim.ground_normal_force(f) / s.weight),
         );
         obs.extend(self.prev_action.iter().copied());
+        if s.config.gait_clock.is_some() {
+            let angle = std::f32::consts::TAU * self.phase();
+            obs.extend([angle.sin(), angle.cos()]);
+        }
         for (o, f) in obs.iter_mut().zip(&s.obs_scale) {
             *o *= f;
         }
@@ -1132,6 +1249,12 @@ impl Env for WalkEnv {
         self.last_torque.fill(0.0);
         self.last_power.fill(0.0);
         self.last_abs_power.fill(0.0);
+        // Drawn last, so that resets without a clock are those of earlier versions.
+        self.phase0 = if s.config.gait_clock.is_some() {
+            rng.random_range(0.0..1.0)
+        } else {
+            0.0
+        };
         self.observation()
     }
 
@@ -1218,6 +1341,15 @@ impl Env for WalkEnv {
             let a2: f32 = self.prev_action.iter().map(|a| a * a).sum();
             terms.push(("action_sq", -w.action_sq * a2));
         }
+        let feet = s.feet.map(|f| self.sim.ground_normal_force(f));
+        if let Some(clock) = &s.config.gait_clock {
+            let r = if fell || off_course {
+                0.0
+            } else {
+                clock.contact_reward(self.phase(), feet)
+            };
+            terms.push(("gait_clock", r));
+        }
         if w.torque_sq != 0.0 {
             let t2: f32 = self
                 .last_torque
@@ -1235,7 +1367,6 @@ impl Env for WalkEnv {
         let success = !fell && !off_course && pose.translation.x >= s.config.track_length;
         let terminated = fell || off_course || success;
         let truncated = !terminated && self.steps >= s.max_steps;
-        let feet = s.feet.map(|f| self.sim.ground_normal_force(f));
         let gait = GaitSample {
             time: self.steps as f32 * s.config.control_period,
             torso_position: pose.translation.to_array(),

@@ -49,6 +49,30 @@ fn actions_map_onto_the_joint_ranges_through_the_standing_pose() {
 }
 
 #[test]
+fn a_range_makes_the_targets_a_residual_around_standing() {
+    let mut cfg = config();
+    cfg.target.range = Some(0.2);
+    let env = WalkEnv::new(cfg).unwrap();
+    let deg = std::f32::consts::PI / 180.0;
+    // q* = q_stand + a·0.2 rad (11.46°), clamped to the limits.
+    let cases = [
+        (0, 0.0, -2.0),
+        (0, 1.0, -2.0 + 11.459_156),
+        (0, -0.5, -2.0 - 5.729_578),
+        (1, -1.0, 5.0),
+        (2, 1.0, -8.0 + 11.459_156),
+        (2, -1.0, -19.459_156),
+    ];
+    for (k, a, want) in cases {
+        let got = env.target_angle(k, a) / deg;
+        assert!(
+            (got - want).abs() < 1e-3,
+            "joint {k}, a = {a}: {got}° vs {want}°"
+        );
+    }
+}
+
+#[test]
 fn a_zero_action_holds_the_standing_pose_for_20_s() {
     let mut env = WalkEnv::new(config()).unwrap();
     for seed in [0, 1, 2] {
