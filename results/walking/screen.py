@@ -1,6 +1,6 @@
 """Summarises walking-recipe runs: training curve metrics, then the gait of the final (and,
 for ES runs, best) policy from `esrl eval RUN --episodes 10` (RUN/eval.json,
-RUN/best/eval.json).
+RUN/best/eval.json, or RUN/best-eval.json in a record copied by collect.py).
 
 Usage: python screen.py NAME=RUN_DIR [NAME=RUN_DIR ...]   (Markdown table on stdout)
 """
@@ -76,7 +76,10 @@ def main():
         name, d = arg.split("=", 1)
         run = Path(d)
         s = json.loads((run / "summary.json").read_text())
-        for label, ev in (("last", run / "eval.json"), ("best", run / "best" / "eval.json")):
+        best = run / "best" / "eval.json"
+        if not best.exists():  # a run record copied into results/ (collect.py)
+            best = run / "best-eval.json"
+        for label, ev in (("last", run / "eval.json"), ("best", best)):
             if not ev.exists():
                 continue
             g = gait_row(ev)

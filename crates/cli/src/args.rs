@@ -102,8 +102,13 @@ pub enum Preset {
     /// Visible learning on a 2-core machine: about 3 minutes for ES-SAC (150 generations).
     Quick,
     /// `quick` with 5× the gradient updates per generation and 895 generations: the ES-SAC
-    /// run (seed 0) that stays up 60 s, about 75 minutes on one core.
+    /// run (seed 0) that stayed up 60 s on the former hard-limit physics (about 75 minutes
+    /// on one core); on today's physics it is not that run.
     Long,
+    /// The walking recipe of `results/walking`: `quick`'s networks on joint-angle targets
+    /// around the standing pose, alive bonus 0.25, a gait clock, 0.25 gradient updates per
+    /// environment step, 4 million environment steps (1.5–2 hours on a 2-core machine).
+    Walking,
     /// Seconds: tiny budget and networks, for tests.
     Smoke,
 }

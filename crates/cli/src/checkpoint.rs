@@ -558,7 +558,7 @@ pub fn load_agent(dir: &Path, agent: &mut Agent) -> Result<HashMap<String, Vec<f
     for name in names {
         if tensors[name].iter().any(|x| !x.is_finite()) {
             bail!(
-                "{}: tensor `{name}` holds non-finite values (NaN or ±inf); these weights                  cannot be evaluated or trained (the run diverged before this checkpoint?)",
+                "{}: tensor `{name}` holds non-finite values (NaN or ±inf); these weights cannot be evaluated or trained (the run diverged before this checkpoint?)",
                 p.display()
             );
         }

@@ -246,6 +246,9 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
             "\n  time:   the paper's budget: hours (5–8 h for ES-SAC on 2 cores, by its own ETA); \
              `--preset quick` shows learning in a few minutes"
         }
+        (Preset::Walking, _, EnvKind::Walk) => {
+            "\n  time:   4 million env steps: 1–2 h on 2 cores (results/walking/README.md)"
+        }
         _ => "",
     };
     format!(
@@ -355,6 +358,7 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
         let mut env = make_env();
         h.warm_start(env.as_mut());
     }
+    let steps_at_start = learner.trainer().env_steps;
 
     let mut diverged: Option<AgentError> = None;
     loop {
@@ -459,12 +463,31 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
             eta_told = true;
             let left = total.saturating_sub(state.rows);
             let pace = elapsed / measured as f64;
-            let text = format!(
-                "pace: {:.1} s per {unit} over the first {measured}: about {} for the {left} left \
-                 (episodes lengthen as the policy learns to stay up, so likely more)",
-                pace,
-                human_duration(pace * left as f64)
-            );
+            let by_rows = pace * left as f64;
+            let steps_now = learner.trainer().env_steps;
+            // A step budget ends the run first when the steps left take less time than the
+            // rows left, at the step rate measured so far.
+            let by_steps = cfg.max_env_steps.and_then(|b| {
+                let rate = steps_now.saturating_sub(steps_at_start) as f64 / elapsed;
+                let steps_left = b.saturating_sub(steps_now);
+                let secs = steps_left as f64 / rate;
+                (rate > 0.0 && secs < by_rows).then_some((secs, steps_left, rate))
+            });
+            let text = match by_steps {
+                Some((secs, steps_left, rate)) => format!(
+                    "pace: {rate:.0} env steps/s over the first {measured} {unit}s: about {} \
+                     for the {steps_left} env steps left of the step budget (episodes \
+                     lengthen as the policy learns to stay up; the step rate varies less)",
+                    human_duration(secs)
+                ),
+                None => format!(
+                    "pace: {:.1} s per {unit} over the first {measured}: about {} for the \
+                     {left} left (episodes lengthen as the policy learns to stay up, so \
+                     likely more)",
+                    pace,
+                    human_duration(by_rows)
+                ),
+            };
             if bar.is_hidden() {
                 eprintln!("{text}");
             } else {
@@ -472,8 +495,12 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
             }
         }
         if log && last_log.elapsed().as_secs_f64() > 10.0 {
+            let steps = match cfg.max_env_steps {
+                Some(b) => format!(" | {}/{b} env steps", learner.trainer().env_steps),
+                None => String::new(),
+            };
             eprintln!(
-                "[{}/{}] {msg} | best so far {best:.1} | {}",
+                "[{}/{}] {msg} | best so far {best:.1}{steps} | {}",
                 state.rows,
                 total,
                 human_duration(wall0 + elapsed)
