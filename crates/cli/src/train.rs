@@ -247,7 +247,7 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
              `--preset quick` shows learning in a few minutes"
         }
         (Preset::Walking, _, EnvKind::Walk) => {
-            "\n  time:   4 million env steps: 1–2 h on 2 cores (results/walking/README.md)"
+            "\n  time:   4 million env steps: about 1.5 h for ES-SAC on one core (results/walking)"
         }
         _ => "",
     };
