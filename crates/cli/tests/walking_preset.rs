@@ -2,33 +2,13 @@
 //! `results/walking/overlay.toml` (the configuration of the runs in `results/walking`), and
 //! plain agents under it learn at the same update-to-data ratio within the same step budget.
 
-use esrl::args::{AgentKind, EnvKind, Preset, TrainOptions};
+mod common;
+
+use common::{train_options, without_preset_name};
+use esrl::args::{AgentKind, EnvKind, Preset};
 use esrl::config::TrainConfig;
 use esrl_agents::LearnEvery;
 use std::path::PathBuf;
-
-fn options(preset: Preset, config: Option<PathBuf>) -> TrainOptions {
-    TrainOptions {
-        preset,
-        config,
-        env: None,
-        urdf: None,
-        threads: Some(1),
-        generations: None,
-        episodes: None,
-        steps: None,
-        no_progress: true,
-    }
-}
-
-fn without_preset_name(c: &TrainConfig) -> String {
-    c.to_toml()
-        .unwrap()
-        .lines()
-        .filter(|l| !l.starts_with("preset ="))
-        .collect::<Vec<_>>()
-        .join("\n")
-}
 
 #[test]
 fn walking_is_quick_with_the_documented_overlay() {
@@ -37,12 +17,13 @@ fn walking_is_quick_with_the_documented_overlay() {
     for agent in [AgentKind::EsSac, AgentKind::EsTd3, AgentKind::EsDdpg] {
         let documented = TrainConfig::resolve(
             agent,
-            &options(Preset::Quick, Some(overlay.clone())),
+            &train_options(Preset::Quick, Some(overlay.clone()), None),
             Some(0),
         )
         .unwrap();
         let walking =
-            TrainConfig::resolve(agent, &options(Preset::Walking, None), Some(0)).unwrap();
+            TrainConfig::resolve(agent, &train_options(Preset::Walking, None, None), Some(0))
+                .unwrap();
         assert_eq!(walking.preset, Preset::Walking);
         assert_eq!(walking.env, EnvKind::Walk);
         assert_eq!(
@@ -58,10 +39,16 @@ fn walking_is_quick_with_the_documented_overlay() {
 
 #[test]
 fn plain_agents_learn_at_the_same_ratio_within_the_same_steps() {
-    let hybrid =
-        TrainConfig::resolve(AgentKind::EsSac, &options(Preset::Walking, None), Some(0)).unwrap();
+    let hybrid = TrainConfig::resolve(
+        AgentKind::EsSac,
+        &train_options(Preset::Walking, None, None),
+        Some(0),
+    )
+    .unwrap();
     for agent in [AgentKind::Sac, AgentKind::Td3, AgentKind::Ddpg] {
-        let plain = TrainConfig::resolve(agent, &options(Preset::Walking, None), Some(0)).unwrap();
+        let plain =
+            TrainConfig::resolve(agent, &train_options(Preset::Walking, None, None), Some(0))
+                .unwrap();
         assert_eq!(plain.max_env_steps, hybrid.max_env_steps);
         assert_eq!(plain.rl.learn_every, LearnEvery::Steps(4));
         assert_eq!(plain.rl.updates_per_learn, 1);
@@ -71,8 +58,12 @@ fn plain_agents_learn_at_the_same_ratio_within_the_same_steps() {
         assert_eq!(plain.network, hybrid.network);
     }
     // `quick` itself is untouched.
-    let quick =
-        TrainConfig::resolve(AgentKind::EsSac, &options(Preset::Quick, None), Some(0)).unwrap();
+    let quick = TrainConfig::resolve(
+        AgentKind::EsSac,
+        &train_options(Preset::Quick, None, None),
+        Some(0),
+    )
+    .unwrap();
     assert_eq!(quick.updates_per_step, None);
     assert!(quick.walk.gait_clock.is_none());
 }

@@ -54,3 +54,33 @@ pub fn tensors(path: &Path) -> BTreeMap<String, Vec<u32>> {
         .map(|(k, t)| (k, t.data.iter().map(|x| x.to_bits()).collect()))
         .collect()
 }
+
+/// Training options as the command line gives them: a preset, an optional `--config` file
+/// and `--generations`, one thread, no progress bar.
+pub fn train_options(
+    preset: esrl::args::Preset,
+    config: Option<std::path::PathBuf>,
+    generations: Option<usize>,
+) -> esrl::args::TrainOptions {
+    esrl::args::TrainOptions {
+        preset,
+        config,
+        env: None,
+        urdf: None,
+        threads: Some(1),
+        generations,
+        episodes: None,
+        steps: None,
+        no_progress: true,
+    }
+}
+
+/// A resolved configuration as TOML, without the recorded preset name.
+pub fn without_preset_name(c: &esrl::config::TrainConfig) -> String {
+    c.to_toml()
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with("preset ="))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
