@@ -107,9 +107,13 @@ pub fn run(args: &TrainArgs) -> Result<(PathBuf, bool)> {
 pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
     let agent = cfg.agent.name();
     let budget = if cfg.agent.is_hybrid() {
+        let updates = match cfg.updates_per_step {
+            Some(r) => format!("{r} updates per env step"),
+            None => format!("{} inner cycles per generation", cfg.inner_cycles),
+        };
         format!(
-            "{} generations × {} individuals × {} rollout(s), {} inner cycles per generation",
-            cfg.generations, cfg.es.population, cfg.es.evaluations, cfg.inner_cycles
+            "{} generations × {} individuals × {} rollout(s), {updates}",
+            cfg.generations, cfg.es.population, cfg.es.evaluations
         )
     } else {
         format!("{} episodes", cfg.episodes)
@@ -122,6 +126,9 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
         (Preset::Paper, true, EnvKind::Walk) => {
             "\n  time:   the paper's budget: hours (5–8 h for ES-SAC on 2 cores, by its own ETA); \
              `--preset quick` shows learning in a few minutes"
+        }
+        (Preset::Walking, _, EnvKind::Walk) => {
+            "\n  time:   4 million env steps: about 1.5 h for ES-SAC on one core (results/walking)"
         }
         _ => "",
     };
@@ -227,6 +234,7 @@ impl LearnerVisitor for Drive<'_> {
         let mut last_log = Instant::now();
         let started = Instant::now();
         let rows_at_start = training.rows();
+        let steps_at_start = training.learner().env_steps();
         let mut eta_told = false;
         let mut finished = false;
         loop {
@@ -252,12 +260,30 @@ impl LearnerVisitor for Drive<'_> {
                 eta_told = true;
                 let left = total.saturating_sub(row.rows);
                 let pace = elapsed / measured as f64;
-                let text = format!(
-                    "pace: {:.1} s per {unit} over the first {measured}: about {} for the {left} \
-                     left (episodes lengthen as the policy learns to stay up, so likely more)",
-                    pace,
-                    human_duration(pace * left as f64)
-                );
+                let by_rows = pace * left as f64;
+                let steps_now = training.learner().env_steps();
+                // A step budget ends the run first when the steps left take less time than
+                // the rows left, at the step rate measured so far.
+                let by_steps = cfg.max_env_steps.and_then(|b| {
+                    let rate = steps_now.saturating_sub(steps_at_start) as f64 / elapsed;
+                    let steps_left = b.saturating_sub(steps_now);
+                    let secs = steps_left as f64 / rate;
+                    (rate > 0.0 && secs < by_rows).then_some((secs, steps_left, rate))
+                });
+                let text = match by_steps {
+                    Some((secs, steps_left, rate)) => format!(
+                        "pace: {rate:.0} env steps/s over the first {measured} {unit}s: about \
+                         {} for the {steps_left} env steps left of the step budget (episodes \
+                         lengthen as the policy learns to stay up; the step rate varies less)",
+                        human_duration(secs)
+                    ),
+                    None => format!(
+                        "pace: {pace:.1} s per {unit} over the first {measured}: about {} for \
+                         the {left} left (episodes lengthen as the policy learns to stay up, so \
+                         likely more)",
+                        human_duration(by_rows)
+                    ),
+                };
                 if bar.is_hidden() {
                     eprintln!("{text}");
                 } else {
@@ -265,8 +291,12 @@ impl LearnerVisitor for Drive<'_> {
                 }
             }
             if log && last_log.elapsed().as_secs_f64() > 10.0 {
+                let steps = match cfg.max_env_steps {
+                    Some(b) => format!(" | {}/{b} env steps", training.learner().env_steps()),
+                    None => String::new(),
+                };
                 eprintln!(
-                    "[{}/{}] {} | best so far {:.1} | {}",
+                    "[{}/{}] {} | best so far {:.1}{steps} | {}",
                     row.rows,
                     total,
                     row.summary,

@@ -182,6 +182,9 @@ pub struct Hybrid {
     strategy: Strategy,
     es: EsConfig,
     inner_cycles: usize,
+    /// When set, the inner cycles of a generation are this many per environment step it
+    /// collected (rounded) instead of `inner_cycles`.
+    updates_per_step: Option<f64>,
     generation: usize,
     /// The genome of the last generation's best individual (empty before the first).
     kept: Vec<f32>,
@@ -210,6 +213,7 @@ impl Hybrid {
             strategy,
             es,
             inner_cycles,
+            updates_per_step: None,
             generation: 0,
             kept: Vec::new(),
             rl_trained: false,
@@ -247,6 +251,27 @@ impl Hybrid {
     /// and replacement, as the loop's tests do).
     pub fn set_inner_cycles(&mut self, cycles: usize) {
         self.inner_cycles = cycles;
+    }
+
+    /// Gradient updates per environment step collected, when set (see
+    /// [`Hybrid::set_updates_per_step`]).
+    pub fn updates_per_step(&self) -> Option<f64> {
+        self.updates_per_step
+    }
+
+    /// When `Some(ratio)`, the inner cycles of each following generation are `ratio` per
+    /// environment step that generation collected (rounded), replacing the fixed
+    /// [`Hybrid::inner_cycles`]: the update-to-data ratio stays fixed as episodes lengthen.
+    pub fn set_updates_per_step(&mut self, ratio: Option<f64>) {
+        self.updates_per_step = ratio;
+    }
+
+    /// The inner training cycles of a generation that collected `steps` environment steps.
+    fn cycles(&self, steps: usize) -> usize {
+        match self.updates_per_step {
+            Some(ratio) => (ratio * steps as f64).round() as usize,
+            None => self.inner_cycles,
+        }
     }
 
     /// Generations completed.
@@ -396,10 +421,10 @@ impl Hybrid {
                 if replaced {
                     self.trainer.agent_mut().set_genome(&genomes[best].params)?;
                 }
-                self.trainer.train(self.inner_cycles)?
+                self.trainer.train(self.cycles(steps))?
             }
             LoopOrder::TrainThenReplace => {
-                let losses = self.trainer.train(self.inner_cycles)?;
+                let losses = self.trainer.train(self.cycles(steps))?;
                 if replaced {
                     self.trainer.agent_mut().set_genome(&genomes[best].params)?;
                 }

@@ -209,7 +209,7 @@ pub fn walk_episode(
                     torso_z_error: f64::from(g.height_error),
                     forward_velocity: f64::from(g.forward_velocity),
                     torques: &f64s(&g.joint_torque),
-                    powers: &f64s(&g.joint_power),
+                    powers: &f64s(&g.joint_abs_power),
                     foot_forces: &f64s(&g.foot_force),
                     joint_angles: &f64s(&g.joint_angle),
                     foot_positions: &foot_positions,

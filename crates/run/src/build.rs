@@ -130,13 +130,15 @@ pub fn learner(cfg: &TrainConfig, envs: &Envs, threads: usize) -> Result<AnyLear
         let evaluator = LocalEvaluator::new(envs.make.clone(), threads)
             .map_err(Error::other)
             .context("starting the rollout thread pool")?;
-        AnyLearner::Hybrid(Box::new(Hybrid::new(
+        let mut hybrid = Hybrid::new(
             agent,
             cfg.es.clone(),
             cfg.inner_cycles,
             cfg.seed,
             Arc::new(evaluator),
-        )))
+        );
+        hybrid.set_updates_per_step(cfg.updates_per_step);
+        AnyLearner::Hybrid(Box::new(hybrid))
     } else {
         AnyLearner::Plain(Box::new(Trainer::new(agent, cfg.seed)))
     })

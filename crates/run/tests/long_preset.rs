@@ -2,18 +2,11 @@
 //! stays up 60 s (`results/experiments/inner1000-s0`): `quick`, the overlay file
 //! `inner_cycles = 1000`, and 895 generations. Only the recorded preset name differs.
 
-use esrl_run::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
-use std::path::PathBuf;
+mod common;
 
-fn options(preset: Preset, config: Option<PathBuf>, generations: Option<usize>) -> Overrides {
-    Overrides {
-        preset,
-        config,
-        threads: Some(1),
-        generations,
-        ..Overrides::default()
-    }
-}
+use common::{options, without_preset_name};
+use esrl_run::{AgentKind, EnvKind, Preset, TrainConfig};
+use std::path::PathBuf;
 
 #[test]
 fn long_is_quick_with_the_documented_overlay() {
@@ -35,15 +28,7 @@ fn long_is_quick_with_the_documented_overlay() {
     assert_eq!(long.env, EnvKind::Walk);
     assert_eq!(long.inner_cycles, 1000);
     assert_eq!(long.generations, 895);
-    let strip = |c: &TrainConfig| {
-        c.to_toml()
-            .unwrap()
-            .lines()
-            .filter(|l| !l.starts_with("preset ="))
-            .collect::<Vec<_>>()
-            .join("\n")
-    };
-    assert_eq!(strip(&long), strip(&documented));
+    assert_eq!(without_preset_name(&long), without_preset_name(&documented));
     // And it differs from `quick` where it should.
     let quick = TrainConfig::resolve(
         AgentKind::EsSac,

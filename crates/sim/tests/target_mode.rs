@@ -24,7 +24,6 @@ fn config() -> WalkConfig {
 #[test]
 fn actions_map_onto_the_joint_ranges_through_the_standing_pose() {
     let env = WalkEnv::new(config()).unwrap();
-    let deg = std::f32::consts::PI / 180.0;
     // Left hip: standing −2°, range −90°…+30°; knee: 10°, 5°…90°; ankle: −8°, −20°…+20°.
     let cases = [
         (0, 0.0, -2.0),
@@ -39,13 +38,24 @@ fn actions_map_onto_the_joint_ranges_through_the_standing_pose() {
         (2, 7.0, 20.0),
         (2, f32::NAN, -8.0),
     ];
-    for (k, a, want) in cases {
-        let got = env.target_angle(k, a) / deg;
-        assert!(
-            (got - want).abs() < 1e-3,
-            "joint {k}, a = {a}: {got}° vs {want}°"
-        );
-    }
+    assert_targets(&env, &cases);
+}
+
+#[test]
+fn a_range_makes_the_targets_a_residual_around_standing() {
+    let mut cfg = config();
+    cfg.target.range = Some(0.2);
+    let env = WalkEnv::new(cfg).unwrap();
+    // q* = q_stand + a·0.2 rad (11.46°), clamped to the limits.
+    let cases = [
+        (0, 0.0, -2.0),
+        (0, 1.0, -2.0 + 11.459_156),
+        (0, -0.5, -2.0 - 5.729_578),
+        (1, -1.0, 5.0),
+        (2, 1.0, -8.0 + 11.459_156),
+        (2, -1.0, -19.459_156),
+    ];
+    assert_targets(&env, &cases);
 }
 
 #[test]
@@ -169,4 +179,16 @@ fn gait_data_report_the_servo_torque_and_its_work() {
         held > 10.0,
         "the servos should hold the body, largest torque {held} N·m"
     );
+}
+
+/// Asserts `env.target_angle(k, a)` in degrees for each `(k, a, want°)`.
+fn assert_targets(env: &WalkEnv, cases: &[(usize, f32, f32)]) {
+    let deg = std::f32::consts::PI / 180.0;
+    for &(k, a, want) in cases {
+        let got = env.target_angle(k, a) / deg;
+        assert!(
+            (got - want).abs() < 1e-3,
+            "joint {k}, a = {a}: {got}° vs {want}°"
+        );
+    }
 }

@@ -4,7 +4,7 @@ pictures of the gait (``esrl_rs.gait``), MCAP recordings, and the environments a
 ``Env``\\ s.
 
 >>> import esrl_rs
->>> run = esrl_rs.load_run("runs/pendulum")            # doctest: +SKIP
+>>> run = esrl_rs.load_run("runs/sac-pendulum-s0")     # doctest: +SKIP
 >>> esrl_rs.metrics.best_win_50(run.metrics["curve"])   # doctest: +SKIP
 >>> env = esrl_rs.Pendulum()                            # doctest: +SKIP
 

@@ -177,6 +177,12 @@ pub struct TargetGains {
     pub stiffness: f32,
     /// Damping `kd`, N·m·s/rad. Default 60 (module docs, "Action").
     pub damping: f32,
+    /// When set, the targets span the standing angle ± this many radians (`q* = q_stand +
+    /// a·range`, clamped to the joint's limits) instead of reaching the limits at ±1: a
+    /// residual around standing, so an untrained policy's actions do not throw the legs
+    /// across their whole range. Default none (±1 reach the limits).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub range: Option<f32>,
 }
 
 impl Default for TargetGains {
@@ -184,7 +190,71 @@ impl Default for TargetGains {
         Self {
             stiffness: 1500.0,
             damping: 60.0,
+            range: None,
         }
+    }
+}
+
+/// A gait clock ([`WalkConfig::gait_clock`]): a phase φ that advances at one cycle per
+/// `period` seconds, given to the policy as (sin 2πφ, cos 2πφ) at the end of the observation,
+/// and a reward for foot contacts that follow it (the periodic reward composition of
+/// Siekmann et al., "Sim-to-real learning of all common bipedal gaits via periodic reward
+/// composition", ICRA 2021, reduced to contact).
+///
+/// The left foot is meant to be down for φ ∈ [0, duty), the right foot for (φ + ½) mod 1 ∈
+/// [0, duty): with `duty` > ½ the feet alternate with two double-support phases of
+/// `duty − ½` each. Each step pays `reward · (m_L + m_R)/2`, with `m` = +1 for a foot whose
+/// contact (normal force above `contact_force`) matches its phase and −1 otherwise. The
+/// phase starts at a value drawn from the reset seed, so the policy meets every phase at
+/// reset.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct GaitClock {
+    /// Seconds per gait cycle (stride). Default 1.0 (adult walking at 1.2–1.4 m/s: cadence
+    /// ≈ 110 steps/min, a stride of ≈ 1.1 s; Perry & Burnfield, *Gait Analysis*).
+    pub period: f32,
+    /// Share of the cycle each foot is meant to be down. Default 0.6 (stance 60 % of the
+    /// cycle at normal walking speed, double support 2 × 10 %; Perry & Burnfield).
+    pub duty: f32,
+    /// Reward per step for contacts that follow the clock. Default 0.5 (esrl's choice: of the
+    /// order of the forward term at a walking speed).
+    pub reward: f32,
+    /// Normal force above which a foot counts as down, N. Default 10 (the gait metrics'
+    /// threshold, `esrl_metrics::GaitThresholds`).
+    pub contact_force: f32,
+}
+
+impl Default for GaitClock {
+    fn default() -> Self {
+        Self {
+            period: 1.0,
+            duty: 0.6,
+            reward: 0.5,
+            contact_force: 10.0,
+        }
+    }
+}
+
+impl GaitClock {
+    /// Whether each foot (left, right) is meant to be down at phase `phi` ∈ [0, 1).
+    pub fn stance(&self, phi: f32) -> [bool; 2] {
+        let right = (phi + 0.5).rem_euclid(1.0);
+        [phi.rem_euclid(1.0) < self.duty, right < self.duty]
+    }
+
+    /// The clock's reward for the feet's normal forces at phase `phi`.
+    pub fn contact_reward(&self, phi: f32, foot_force: [f32; 2]) -> f32 {
+        let want = self.stance(phi);
+        let matched: f32 = (0..2)
+            .map(|i| {
+                if (foot_force[i] > self.contact_force) == want[i] {
+                    1.0
+                } else {
+                    -1.0
+                }
+            })
+            .sum();
+        self.reward * matched / 2.0
     }
 }
 
@@ -235,6 +305,11 @@ pub struct WalkConfig {
     pub action: ActionMode,
     /// Servo gains of the `target` action mode.
     pub target: TargetGains,
+    /// Optional gait clock: phase features at the end of the observation and a reward for
+    /// contacts that follow them ([`GaitClock`]). Default none (the paper's observation and
+    /// reward).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gait_clock: Option<GaitClock>,
     /// Multiply the observation by the fixed per-quantity factors of the module docs
     /// ([`WalkEnv::obs_scale`](super::WalkEnv::obs_scale)) so every entry is of order one. Default true (esrl's choice:
     /// the raw values span three orders of magnitude, accelerations reach 160 m/s²).
@@ -273,6 +348,7 @@ impl Default for WalkConfig {
             reset: ResetConfig::default(),
             action: ActionMode::Torque,
             target: TargetGains::default(),
+            gait_clock: None,
             normalize_obs: true,
             actuated_joints: [
                 "left_hip",
@@ -356,6 +432,21 @@ impl WalkConfig {
         nonneg("reset.split", self.reset.split)?;
         nonneg("target.stiffness", self.target.stiffness)?;
         nonneg("target.damping", self.target.damping)?;
+        if let Some(r) = self.target.range {
+            pos("target.range", r)?;
+        }
+        if let Some(c) = &self.gait_clock {
+            pos("gait_clock.period", c.period)?;
+            if !(c.duty > 0.0 && c.duty < 1.0) {
+                return Err(config_err(
+                    "gait_clock.duty",
+                    c.duty.to_string(),
+                    "must be in (0, 1)",
+                ));
+            }
+            fin("gait_clock.reward", c.reward)?;
+            nonneg("gait_clock.contact_force", c.contact_force)?;
+        }
         nonneg("init_noise.joint_angle", self.init_noise.joint_angle)?;
         nonneg("init_noise.joint_velocity", self.init_noise.joint_velocity)?;
         if self.actuated_joints.is_empty() {

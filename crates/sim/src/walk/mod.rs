@@ -143,7 +143,7 @@ use std::sync::Arc;
 use rapier3d::prelude::Vector;
 
 pub use config::{
-    ActionMode, FallConfig, InitNoise, ResetConfig, ResetPose, RewardConfig, TargetGains,
+    ActionMode, FallConfig, GaitClock, InitNoise, ResetConfig, ResetPose, RewardConfig, TargetGains,
     UprightGate, WalkConfig,
 };
 pub use observation::ObsLayout;
@@ -168,6 +168,8 @@ pub struct WalkEnv {
     last_torque: Vec<f32>,
     last_power: Vec<f32>,
     last_abs_power: Vec<f32>,
+    /// Gait-clock phase at reset, drawn from the reset seed (0 without a clock).
+    phase0: f32,
 }
 
 impl WalkEnv {
@@ -210,6 +212,7 @@ impl WalkEnv {
             last_torque: vec![0.0; n_a],
             last_power: vec![0.0; n_a],
             last_abs_power: vec![0.0; n_a],
+            phase0: 0.0,
         }
     }
 
@@ -296,7 +299,12 @@ impl WalkEnv {
     /// A name for every observation index, e.g. `joint_angle/left_knee`.
     pub fn obs_names(&self) -> Vec<String> {
         let s = &self.shared;
-        observation::names(&s.model, &s.sources(), &s.config.foot_links)
+        observation::names(
+            &s.model,
+            &s.sources(),
+            &s.config.foot_links,
+            s.config.gait_clock.is_some(),
+        )
     }
 
     /// World poses of every link frame (URDF link order).
@@ -314,9 +322,20 @@ impl WalkEnv {
         self.steps
     }
 
+    /// The gait-clock phase φ ∈ [0, 1) now ([`GaitClock`]; 0 without a clock).
+    pub fn phase(&self) -> f32 {
+        match &self.shared.config.gait_clock {
+            Some(c) => {
+                let t = self.steps as f32 * self.shared.config.control_period;
+                (self.phase0 + t / c.period).rem_euclid(1.0)
+            }
+            None => 0.0,
+        }
+    }
+
     /// The joint angle target of actuated joint `k` for action `a` in `target` mode (module
     /// docs, "Action"): the standing angle at 0, the joint's limits at ±1, linear in between
-    /// on each side.
+    /// on each side; with [`TargetGains::range`], `q_stand + a·range` clamped to the limits.
     pub fn target_angle(&self, k: usize, a: f32) -> f32 {
         let s = &self.shared;
         let stand = s.standing_q[s.actuated[k]] as f32;
@@ -326,6 +345,9 @@ impl WalkEnv {
         } else {
             0.0
         };
+        if let Some(range) = self.config().target.range {
+            return (stand + a * range).clamp(lo, hi);
+        }
         if a >= 0.0 {
             stand + a * (hi - stand)
         } else {
@@ -390,7 +412,14 @@ impl WalkEnv {
 
     fn observation(&self) -> Vec<f32> {
         let sources = self.shared.sources();
-        observation::observe(&sources, &self.sim, &self.prev_action, self.acceleration)
+        let phase = self.shared.config.gait_clock.is_some().then(|| self.phase());
+        observation::observe(
+            &sources,
+            &self.sim,
+            &self.prev_action,
+            self.acceleration,
+            phase,
+        )
     }
 }
 
@@ -405,7 +434,9 @@ impl Env for WalkEnv {
 
     fn reset(&mut self, seed: u64) -> Vec<f32> {
         let s = self.shared.clone();
-        self.sim = RobotSim::build(s.model.clone(), &s.setup, &s.initial_state(seed));
+        let (state, phase0) = s.initial_state(seed);
+        self.sim = RobotSim::build(s.model.clone(), &s.setup, &state);
+        self.phase0 = phase0;
         self.prev_action.fill(0.0);
         self.prev_velocity = self.sim.link_origin_velocity(s.torso);
         self.acceleration = Vector::ZERO;
@@ -438,8 +469,12 @@ impl Env for WalkEnv {
             abs_power: &self.last_abs_power,
             limit: &s.effort,
         };
+        let feet = reward::Feet {
+            force: s.feet.map(|f| self.sim.ground_normal_force(f)),
+            phase: self.phase(),
+        };
         let finite = obs.iter().all(|v| v.is_finite());
-        let outcome = reward::judge(&s.config, &torso, finite, &effort);
+        let outcome = reward::judge(&s.config, &torso, finite, &effort, &feet);
         let terminated = outcome.fell || outcome.off_course || outcome.success;
         let truncated = !terminated && self.steps >= s.max_steps;
         let gait = GaitSample {
@@ -462,7 +497,7 @@ impl Env for WalkEnv {
             joint_torque: self.last_torque.clone(),
             joint_power: self.last_power.clone(),
             joint_abs_power: self.last_abs_power.clone(),
-            foot_force: s.feet.map(|f| self.sim.ground_normal_force(f)),
+            foot_force: feet.force,
             fell: outcome.fell,
             off_course: outcome.off_course,
             success: outcome.success,

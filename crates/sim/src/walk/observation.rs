@@ -55,12 +55,15 @@ pub struct ObsLayout {
     pub foot_forces: Range<usize>,
     /// Previous action.
     pub previous_action: Range<usize>,
+    /// Gait clock (sin 2πφ, cos 2πφ), when [`WalkConfig::gait_clock`](super::WalkConfig::gait_clock)
+    /// is set.
+    pub clock: Option<Range<usize>>,
     /// Total length.
     pub len: usize,
 }
 
 impl ObsLayout {
-    pub(super) fn new(n_a: usize, n_p: usize) -> Self {
+    pub(super) fn new(n_a: usize, n_p: usize, clock: bool) -> Self {
         let mut at = 2;
         let mut take = |n: usize| {
             let r = at..at + n;
@@ -77,6 +80,7 @@ impl ObsLayout {
         let passive_velocities = take(n_p);
         let foot_forces = take(2);
         let previous_action = take(n_a);
+        let clock = clock.then(|| take(2));
         Self {
             height_error: 0,
             lateral_offset: 1,
@@ -90,6 +94,7 @@ impl ObsLayout {
             passive_velocities,
             foot_forces,
             previous_action,
+            clock,
             len: at,
         }
     }
@@ -113,12 +118,14 @@ impl ObsLayout {
 
 /// The observation after a step (or a reset): the module docs' table, in its order, each
 /// entry multiplied by its scale factor. `acceleration` is the torso's world acceleration
-/// over the last control period, `previous_action` the clamped action of the last step.
+/// over the last control period, `previous_action` the clamped action of the last step,
+/// `phase` the gait clock's phase when there is a clock.
 pub(super) fn observe(
     s: &Sources,
     sim: &RobotSim,
     previous_action: &[f32],
     acceleration: Vector,
+    phase: Option<f32>,
 ) -> Vec<f32> {
     let pose = sim.link_pose(s.torso);
     let inv = pose.rotation.inverse();
@@ -143,14 +150,24 @@ pub(super) fn observe(
             .map(|&f| sim.ground_normal_force(f) / s.weight),
     );
     obs.extend(previous_action.iter().copied());
+    if let Some(phi) = phase {
+        let angle = std::f32::consts::TAU * phi;
+        obs.extend([angle.sin(), angle.cos()]);
+    }
     for (o, f) in obs.iter_mut().zip(s.scale) {
         *o *= f;
     }
     obs
 }
 
-/// A name for every observation index, e.g. `joint_angle/left_knee`.
-pub(super) fn names(model: &RobotModel, s: &Sources, foot_links: &[String]) -> Vec<String> {
+/// A name for every observation index, e.g. `joint_angle/left_knee`; `clock` adds the gait
+/// clock's `clock/sin`, `clock/cos`.
+pub(super) fn names(
+    model: &RobotModel,
+    s: &Sources,
+    foot_links: &[String],
+    clock: bool,
+) -> Vec<String> {
     let joint = |j: &usize| model.joints()[*j].name.clone();
     let mut names = vec!["height_error".to_owned(), "lateral_offset".to_owned()];
     names.extend(["x", "y", "z", "w"].map(|c| format!("orientation/{c}")));
@@ -183,5 +200,8 @@ pub(super) fn names(model: &RobotModel, s: &Sources, foot_links: &[String]) -> V
             .iter()
             .map(|j| format!("previous_action/{}", joint(j))),
     );
+    if clock {
+        names.extend(["clock/sin", "clock/cos"].map(String::from));
+    }
     names
 }

@@ -25,6 +25,13 @@ pub(super) struct Effort<'a> {
     pub(super) limit: &'a [f32],
 }
 
+/// The feet after a step: their ground normal forces (N, left and right) and the gait
+/// clock's phase (when the config has a clock).
+pub(super) struct Feet {
+    pub(super) force: [f32; 2],
+    pub(super) phase: f32,
+}
+
 /// The verdict on one step.
 pub(super) struct Outcome {
     /// Named terms, summing to `reward`.
@@ -40,7 +47,13 @@ pub(super) struct Outcome {
 }
 
 /// Judges a step: `finite` says whether the observation is finite.
-pub(super) fn judge(config: &WalkConfig, torso: &Torso, finite: bool, e: &Effort) -> Outcome {
+pub(super) fn judge(
+    config: &WalkConfig,
+    torso: &Torso,
+    finite: bool,
+    e: &Effort,
+    feet: &Feet,
+) -> Outcome {
     let (pose, vx, z) = (torso.pose, torso.vx, torso.z);
     let y = pose.translation.y;
     let tilt = torso_tilt(pose.rotation);
@@ -67,6 +80,14 @@ pub(super) fn judge(config: &WalkConfig, torso: &Torso, finite: bool, e: &Effort
     if w.action_sq != 0.0 {
         let a2: f32 = e.action.iter().map(|a| a * a).sum();
         terms.push(("action_sq", -w.action_sq * a2));
+    }
+    if let Some(clock) = &config.gait_clock {
+        let r = if fell || off_course {
+            0.0
+        } else {
+            clock.contact_reward(feet.phase, feet.force)
+        };
+        terms.push(("gait_clock", r));
     }
     if w.torque_sq != 0.0 {
         let t2: f32 = e

@@ -93,7 +93,7 @@ impl WalkShared {
             ));
         }
         let weight = (model.total_mass() * config.physics.gravity as f64) as f32;
-        let layout = ObsLayout::new(actuated.len(), passive.len());
+        let layout = ObsLayout::new(actuated.len(), passive.len(), config.gait_clock.is_some());
         let obs_scale = if config.normalize_obs {
             layout.scale()
         } else {
@@ -144,8 +144,8 @@ impl WalkShared {
     /// every movable joint, clamped into the limits, lowest point on the ground, at rest. The
     /// draws, from a ChaCha8 stream seeded with `seed`: for each movable joint in URDF order
     /// the angle then the velocity noise; then the `mixed` pose; then the leading leg of
-    /// `split`.
-    pub(super) fn initial_state(&self, seed: u64) -> RobotState {
+    /// `split`; last, with a gait clock, the clock's starting phase (returned beside the state).
+    pub(super) fn initial_state(&self, seed: u64) -> (RobotState, f32) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let noise = &self.config.init_noise;
         let mut q = self.standing_q.clone();
@@ -179,11 +179,18 @@ impl WalkShared {
             }
         }
         let poses = self.model.forward_kinematics(&Iso::IDENTITY, &q);
-        RobotState {
+        let state = RobotState {
             base_position: [0.0, 0.0, -self.model.lowest_point(&poses)],
             q,
             qd,
-        }
+        };
+        // Drawn last, so that resets without a clock are those of earlier versions.
+        let phase = if self.config.gait_clock.is_some() {
+            rng.random_range(0.0..1.0)
+        } else {
+            0.0
+        };
+        (state, phase)
     }
 }
 

@@ -1,0 +1,66 @@
+//! Contract: `--preset walking` is exactly `quick` with the overlay documented in
+//! `results/walking/overlay.toml` (the configuration of the runs in `results/walking`), and
+//! plain agents under it learn at the same update-to-data ratio within the same step budget.
+
+mod common;
+
+use common::{options, without_preset_name};
+use esrl_agents::LearnEvery;
+use esrl_run::{AgentKind, EnvKind, Preset, TrainConfig};
+use std::path::PathBuf;
+
+#[test]
+fn walking_is_quick_with_the_documented_overlay() {
+    let overlay =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../results/walking/overlay.toml");
+    for agent in [AgentKind::EsSac, AgentKind::EsTd3, AgentKind::EsDdpg] {
+        let documented = TrainConfig::resolve(
+            agent,
+            &options(Preset::Quick, Some(overlay.clone()), None),
+            Some(0),
+        )
+        .unwrap();
+        let walking =
+            TrainConfig::resolve(agent, &options(Preset::Walking, None, None), Some(0)).unwrap();
+        assert_eq!(walking.preset, Preset::Walking);
+        assert_eq!(walking.env, EnvKind::Walk);
+        assert_eq!(
+            without_preset_name(&walking),
+            without_preset_name(&documented)
+        );
+        assert_eq!(walking.updates_per_step, Some(0.25));
+        assert_eq!(walking.max_env_steps, Some(4_000_000));
+        assert!(walking.walk.gait_clock.is_some());
+        assert_eq!(walking.walk.target.range, Some(0.3));
+    }
+}
+
+#[test]
+fn plain_agents_learn_at_the_same_ratio_within_the_same_steps() {
+    let hybrid = TrainConfig::resolve(
+        AgentKind::EsSac,
+        &options(Preset::Walking, None, None),
+        Some(0),
+    )
+    .unwrap();
+    for agent in [AgentKind::Sac, AgentKind::Td3, AgentKind::Ddpg] {
+        let plain =
+            TrainConfig::resolve(agent, &options(Preset::Walking, None, None), Some(0)).unwrap();
+        assert_eq!(plain.max_env_steps, hybrid.max_env_steps);
+        assert_eq!(plain.rl.learn_every, LearnEvery::Steps(4));
+        assert_eq!(plain.rl.updates_per_learn, 1);
+        // The step budget ends training, not the episode count.
+        assert!(plain.episodes as u64 * 2400 > plain.max_env_steps.unwrap());
+        assert_eq!(plain.walk, hybrid.walk);
+        assert_eq!(plain.network, hybrid.network);
+    }
+    // `quick` itself is untouched.
+    let quick = TrainConfig::resolve(
+        AgentKind::EsSac,
+        &options(Preset::Quick, None, None),
+        Some(0),
+    )
+    .unwrap();
+    assert_eq!(quick.updates_per_step, None);
+    assert!(quick.walk.gait_clock.is_none());
+}

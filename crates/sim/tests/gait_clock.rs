@@ -1,0 +1,109 @@
+//! Contract: `walk.gait_clock` (module docs of `walk`, [`GaitClock`]). The clock's stance
+//! windows and contact reward match hand-computed values; with a clock the observation ends
+//! with (sin 2πφ, cos 2πφ) of a phase that starts at a value drawn from the reset seed and
+//! advances by Ts/period per step; each step's `gait_clock` reward term is the contact reward
+//! of that phase and the feet's forces, and nothing on a fall; without a clock the
+//! environment is unchanged (43 observations, the same resets).
+
+use esrl_sim::{Env, GaitClock, WalkConfig, WalkEnv};
+
+#[test]
+fn stance_windows_and_contact_reward_by_hand() {
+    let c = GaitClock {
+        period: 1.0,
+        duty: 0.6,
+        reward: 0.5,
+        contact_force: 10.0,
+    };
+    // Left down for φ ∈ [0, 0.6); right down for (φ + 0.5) mod 1 ∈ [0, 0.6), i.e. φ ∈
+    // [0, 0.1) ∪ [0.5, 1): double support on [0, 0.1) and [0.5, 0.6).
+    assert_eq!(c.stance(0.05), [true, true]);
+    assert_eq!(c.stance(0.3), [true, false]);
+    assert_eq!(c.stance(0.55), [true, true]);
+    assert_eq!(c.stance(0.7), [false, true]);
+    assert_eq!(c.stance(1.3), [true, false], "the phase wraps");
+    // Both feet as the clock wants: +0.5; both wrong: −0.5; one of two: 0.
+    assert_eq!(c.contact_reward(0.3, [50.0, 0.0]), 0.5);
+    assert_eq!(c.contact_reward(0.3, [0.0, 50.0]), -0.5);
+    assert_eq!(c.contact_reward(0.05, [50.0, 5.0]), 0.0);
+    assert_eq!(
+        c.contact_reward(0.7, [9.0, 11.0]),
+        0.5,
+        "10 N is the threshold"
+    );
+}
+
+#[test]
+fn the_clock_is_observed_and_rewarded_step_by_step() {
+    let clock = GaitClock {
+        period: 0.8,
+        ..GaitClock::default()
+    };
+    let cfg = WalkConfig {
+        gait_clock: Some(clock.clone()),
+        ..WalkConfig::default()
+    };
+    let mut env = WalkEnv::new(cfg.clone()).unwrap();
+    assert_eq!(env.obs_dim(), 45);
+    let mut starts = Vec::new();
+    for seed in [0, 1, 2] {
+        let obs = env.reset(seed);
+        let phi0 = env.phase();
+        starts.push(phi0);
+        let angle = std::f32::consts::TAU * phi0;
+        assert!((obs[43] - angle.sin()).abs() < 1e-6 && (obs[44] - angle.cos()).abs() < 1e-6);
+        for k in 1..=40 {
+            let step = env.step(&[0.0; 6]);
+            let want = (phi0 + k as f32 * cfg.control_period / 0.8).rem_euclid(1.0);
+            let phi = env.phase();
+            assert!(
+                (phi - want).abs() < 1e-4 || (phi - want).abs() > 1.0 - 1e-4,
+                "step {k}: φ {phi} vs {want}"
+            );
+            let angle = std::f32::consts::TAU * phi;
+            assert!((step.obs[43] - angle.sin()).abs() < 1e-5);
+            assert!((step.obs[44] - angle.cos()).abs() < 1e-5);
+            let g = step.info.gait.as_ref().unwrap();
+            let term = step
+                .info
+                .reward_terms
+                .iter()
+                .find(|t| t.0 == "gait_clock")
+                .unwrap()
+                .1;
+            let expect = if g.fell {
+                0.0
+            } else {
+                clock.contact_reward(phi, g.foot_force)
+            };
+            assert_eq!(term, expect, "step {k}");
+            if step.terminated {
+                break;
+            }
+        }
+    }
+    assert!(
+        starts[0] != starts[1] && starts[1] != starts[2],
+        "{starts:?}"
+    );
+}
+
+#[test]
+fn without_a_clock_nothing_changes() {
+    let mut plain = WalkEnv::new(WalkConfig::default()).unwrap();
+    let mut clocked = WalkEnv::new(WalkConfig {
+        gait_clock: Some(GaitClock::default()),
+        ..WalkConfig::default()
+    })
+    .unwrap();
+    assert_eq!(plain.obs_dim(), 43);
+    for seed in [3, 4] {
+        let a = plain.reset(seed);
+        let b = clocked.reset(seed);
+        assert_eq!(a[..], b[..43], "same initial state");
+        let sa = plain.step(&[0.1; 6]);
+        let sb = clocked.step(&[0.1; 6]);
+        assert_eq!(sa.obs[..], sb.obs[..43], "same dynamics");
+        assert!(sa.info.reward_terms.iter().all(|t| t.0 != "gait_clock"));
+    }
+}
