@@ -143,8 +143,8 @@ use std::sync::Arc;
 use rapier3d::prelude::Vector;
 
 pub use config::{
-    ActionMode, FallConfig, GaitClock, InitNoise, ResetConfig, ResetPose, RewardConfig, TargetGains,
-    UprightGate, WalkConfig,
+    ActionMode, FallConfig, GaitClock, InitNoise, ResetConfig, ResetPose, RewardConfig,
+    TargetGains, UprightGate, WalkConfig,
 };
 pub use observation::ObsLayout;
 
@@ -412,7 +412,12 @@ impl WalkEnv {
 
     fn observation(&self) -> Vec<f32> {
         let sources = self.shared.sources();
-        let phase = self.shared.config.gait_clock.is_some().then(|| self.phase());
+        let phase = self
+            .shared
+            .config
+            .gait_clock
+            .is_some()
+            .then(|| self.phase());
         observation::observe(
             &sources,
             &self.sim,
