@@ -44,33 +44,15 @@ pub fn time_update(
     reps: usize,
     warmup: usize,
 ) -> Result<UpdateTiming, AgentError> {
-    let cfg = RlConfig {
-        burn_in: 0,
-        seq_len: 8,
-        batch_size: 256,
-        ..RlConfig::for_algo(algo)
-    };
-    let mut agent = Agent::new(algo, obs_dim, act_dim, nets, &cfg, 0)?;
-    let buffer = random_buffer(obs_dim, act_dim);
-    let mut rng = ChaCha8Rng::seed_from_u64(0);
-    let sample = |rng: &mut ChaCha8Rng| {
-        if nets.recurrent() {
-            buffer.sample_sequences(rng, cfg.batch_size, cfg.seq_len, 0)
-        } else {
-            buffer.sample_transitions(rng, cfg.batch_size)
-        }
-    };
+    let mut run = RandomData::new(algo, nets, obs_dim, act_dim, 256)?;
     for _ in 0..warmup {
-        let b = sample(&mut rng);
-        agent.update(&b)?;
+        run.update()?;
     }
     let mut times = Vec::with_capacity(reps.max(1));
     for _ in 0..reps.max(1) {
-        let b = sample(&mut rng);
-        let t = Instant::now();
-        agent.update(&b)?;
-        times.push(t.elapsed().as_secs_f64() * 1e3);
+        times.push(run.update()? * 1e3);
     }
+    let agent = run.agent;
     times.sort_by(f64::total_cmp);
     Ok(UpdateTiming {
         ms_per_update: times[times.len() / 2],
@@ -79,6 +61,73 @@ pub fn time_update(
         actor_params: agent.actor().num_params(),
         critic_params: agent.critics()[0].num_params(),
     })
+}
+
+/// `updates` updates of a fresh `algo` agent (seed 0) with networks `nets`, on batches of
+/// `batch` sequences × 8 steps (recurrent) or `batch` transitions drawn from random data:
+/// the agent afterwards. The same arguments give the same agent, bit for bit, on a rayon
+/// pool of any size (`tests/threaded_update.rs`).
+pub fn train_on_random_data(
+    algo: Algo,
+    nets: &NetConfig,
+    obs_dim: usize,
+    act_dim: usize,
+    batch: usize,
+    updates: usize,
+) -> Result<Agent, AgentError> {
+    let mut run = RandomData::new(algo, nets, obs_dim, act_dim, batch)?;
+    for _ in 0..updates {
+        run.update()?;
+    }
+    Ok(run.agent)
+}
+
+/// An agent updating on batches drawn from a buffer of random data.
+struct RandomData {
+    agent: Agent,
+    buffer: ReplayBuffer,
+    rng: ChaCha8Rng,
+    batch: usize,
+    seq_len: usize,
+    recurrent: bool,
+}
+
+impl RandomData {
+    fn new(
+        algo: Algo,
+        nets: &NetConfig,
+        obs_dim: usize,
+        act_dim: usize,
+        batch: usize,
+    ) -> Result<Self, AgentError> {
+        let cfg = RlConfig {
+            burn_in: 0,
+            seq_len: 8,
+            batch_size: batch,
+            ..RlConfig::for_algo(algo)
+        };
+        Ok(Self {
+            agent: Agent::new(algo, obs_dim, act_dim, nets, &cfg, 0)?,
+            buffer: random_buffer(obs_dim, act_dim),
+            rng: ChaCha8Rng::seed_from_u64(0),
+            batch,
+            seq_len: cfg.seq_len,
+            recurrent: nets.recurrent(),
+        })
+    }
+
+    /// One update on a fresh batch; returns its seconds (batch sampling not timed).
+    fn update(&mut self) -> Result<f64, AgentError> {
+        let b = if self.recurrent {
+            self.buffer
+                .sample_sequences(&mut self.rng, self.batch, self.seq_len, 0)
+        } else {
+            self.buffer.sample_transitions(&mut self.rng, self.batch)
+        };
+        let t = Instant::now();
+        self.agent.update(&b)?;
+        Ok(t.elapsed().as_secs_f64())
+    }
 }
 
 /// A buffer of random transitions in episodes of [`EPISODE`] steps.

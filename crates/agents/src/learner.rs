@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 
 /// One row of a run's metrics (`metrics.jsonl`): its columns are the row's serialised fields.
-pub trait Row: Serialize {
+pub trait Row: Serialize + Send {
     /// The learning-curve value of the row (SPEC §6).
     fn curve(&self) -> f64;
     /// Q₀ of the row (SPEC §6).
@@ -80,8 +80,9 @@ impl<S> LearnerState<S> {
 /// Its full state is three parts: [`Learner::state`] (counters and random streams, small,
 /// serialisable), [`Learner::tensors`] (weights and optimiser moments) and
 /// [`Learner::buffer`] (the replay buffer). Restoring the three into a learner built fresh
-/// from the same configuration continues the run exactly.
-pub trait Learner {
+/// from the same configuration continues the run exactly. Learners are `Send`: a training
+/// session steps them inside its thread pool.
+pub trait Learner: Send {
     /// One row of the metrics.
     type Row: Row;
     /// The learner's own counters, beside the RL side's in [`LearnerState`].

@@ -19,10 +19,11 @@
 
 use crate::agent::{Agent, AgentError, Smoothing, UpdateStats};
 use crate::replay::SequenceBatch;
-use esrl_nn::{Graph, LstmState, Module, Tensor};
+use esrl_nn::{Critic, Graph, LstmState, Module, Tensor};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
+use rayon::prelude::*;
 
 /// The trained part of a batch (its last `seq_len` steps) as tensors, time-major
 /// `(len·B, ·)`, with the loss normaliser 1/M.
@@ -155,19 +156,22 @@ impl Agent {
                 (a2, None)
             }
         };
-        let a2v = g.constant(a2);
-        let mut qmin: Option<Vec<f32>> = None;
-        for (k, c) in self.critic_targets.iter().enumerate() {
-            let q = c
-                .forward(&mut g, o2, a2v, b, st.critic_targets[k].as_ref())
-                .q;
-            let q = g.value(q).data().to_vec();
-            qmin = Some(match qmin {
-                None => q,
-                Some(m) => m.iter().zip(&q).map(|(x, y)| x.min(*y)).collect(),
-            });
-        }
-        let qmin = qmin.unwrap_or_default();
+        // The target critics, each on its own graph, side by side on the rayon pool.
+        let qs: Vec<Vec<f32>> = self
+            .critic_targets
+            .par_iter()
+            .zip(&st.critic_targets)
+            .map(|(c, state)| {
+                let mut g = Graph::no_grad();
+                let (o2, a2) = (g.constant(p.next_obs.clone()), g.constant(a2.clone()));
+                let q = c.forward(&mut g, o2, a2, b, state.as_ref()).q;
+                g.value(q).data().to_vec()
+            })
+            .collect();
+        let qmin = qs
+            .into_iter()
+            .reduce(|m, q| m.iter().zip(&q).map(|(x, y)| x.min(*y)).collect())
+            .unwrap_or_default();
         let gamma = self.cfg.gamma as f32;
         let (r, nd) = (p.reward.data(), p.not_done.data());
         let y = (0..qmin.len())
@@ -183,57 +187,63 @@ impl Agent {
     ///
     /// L(Qₖ) = 1/(2M) Σ m·(Qₖ(s, a) − y)²,
     ///
-    /// M the masked steps. Returns the loss and the masked mean of Q₁.
+    /// M the masked steps. Returns the loss and the masked mean of Q₁. Each critic's loss
+    /// depends on its own parameters only, so each is its own graph, and the critics train
+    /// side by side on the rayon pool (the same numbers as one graph of their sum).
     fn train_critics(
         &mut self,
         p: &Trained,
         y: Tensor,
         st: &BurnIn,
     ) -> Result<(f64, f64), AgentError> {
-        let (mut grads, loss, q_mean) = {
+        let one_critic = |c: &Critic, state: &Option<LstmState>| {
             let mut g = Graph::new();
             let (ov, av, yv, mv) = (
                 g.constant(p.obs.clone()),
                 g.constant(p.action.clone()),
-                g.constant(y),
+                g.constant(y.clone()),
                 g.constant(p.mask.clone()),
             );
-            let mut total = None;
-            let mut q_mean = 0.0;
-            for (k, c) in self.critics.iter().enumerate() {
-                let q = c.forward(&mut g, ov, av, p.batch, st.critics[k].as_ref()).q;
-                if k == 0 {
-                    let qv = g.value(q).data();
-                    q_mean = qv
-                        .iter()
-                        .zip(p.mask.data())
-                        .map(|(q, m)| q * m)
-                        .sum::<f32>()
-                        * p.norm;
-                }
-                let d = g.sub(q, yv);
-                let d2 = g.square(d);
-                let d2 = g.mul(d2, mv);
-                let s = g.sum(d2);
-                let l = g.scale(s, 0.5 * p.norm);
-                total = Some(match total {
-                    None => l,
-                    Some(t) => g.add(t, l),
-                });
-            }
-            let loss = total.expect("at least one critic");
-            let lv = g.value(loss).item();
-            (g.backward(loss), lv, q_mean)
+            let q = c.forward(&mut g, ov, av, p.batch, state.as_ref()).q;
+            let q_mean = g
+                .value(q)
+                .data()
+                .iter()
+                .zip(p.mask.data())
+                .map(|(q, m)| q * m)
+                .sum::<f32>()
+                * p.norm;
+            let d = g.sub(q, yv);
+            let d2 = g.square(d);
+            let d2 = g.mul(d2, mv);
+            let s = g.sum(d2);
+            let l = g.scale(s, 0.5 * p.norm);
+            let lv = g.value(l).item();
+            (g.backward(l), lv, q_mean)
         };
+        let mut per_critic: Vec<_> = self
+            .critics
+            .par_iter()
+            .zip(&st.critics)
+            .map(|(c, state)| one_critic(c, state))
+            .collect();
+        let loss = per_critic
+            .iter()
+            .map(|r| r.1)
+            .reduce(|t, l| t + l)
+            .expect("at least one critic");
+        let q_mean = per_critic[0].2;
         if !loss.is_finite() {
             return Err(AgentError::NonFinite {
                 what: "critic loss",
                 update: self.updates,
             });
         }
-        for (c, opt) in self.critics.iter_mut().zip(&mut self.opt_critics) {
-            opt.apply(c.params_mut(), &mut grads)?;
-        }
+        self.critics
+            .par_iter_mut()
+            .zip(&mut self.opt_critics)
+            .zip(&mut per_critic)
+            .try_for_each(|((c, opt), (grads, _, _))| opt.apply(c.params_mut(), grads).map(drop))?;
         Ok((f64::from(loss), f64::from(q_mean)))
     }
 

@@ -190,16 +190,21 @@ pub enum BenchWhat {
         #[arg(long)]
         json: bool,
     },
-    /// Time of one full SAC update (critics, actor, α, targets), one thread.
+    /// Time of one full SAC update (critics, actor, α, targets) on N threads (its large
+    /// matrix products split by output rows; the result is the same at any N).
     Update {
         /// Network family.
         #[arg(long, value_enum, default_value_t = Arch::Lstm)]
         arch: Arch,
+        /// Threads the update's products may use.
+        #[arg(long, default_value_t = 1)]
+        threads: usize,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
     },
-    /// Wall time of one ES generation's evaluation at 1 and N threads.
+    /// Wall time of an ES generation at 1 and N threads: its rollouts alone, one update, and
+    /// whole generations (rollouts + training, pipelined) as `esrl train` runs them.
     Es {
         /// Threads to compare with one.
         #[arg(long, default_value_t = 2)]

@@ -20,30 +20,65 @@ fn emit<T: Serialize>(json_out: bool, value: &T, text: String) -> Result<()> {
 
 /// Times the one update of training, `Agent::update` (critics, actor, α, targets), for SAC
 /// with the paper-size LSTM or the MLP 256×256 networks, on random data of the PyTorch
-/// baseline's shapes (`esrl_agents::bench`).
-pub fn update_ms(arch: Arch, obs_dim: usize, reps: usize) -> Result<UpdateTiming> {
+/// baseline's shapes (`esrl_agents::bench`), on a pool of `threads` threads.
+pub fn update_ms(arch: Arch, obs_dim: usize, reps: usize, threads: usize) -> Result<UpdateTiming> {
     let nets = match arch {
         Arch::Lstm => NetConfig::default(),
         Arch::Mlp => NetConfig::feed_forward(),
     };
-    Ok(bench::time_update(Algo::Sac, &nets, obs_dim, 6, reps, 2)?)
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.max(1))
+        .build()?;
+    Ok(pool.install(|| bench::time_update(Algo::Sac, &nets, obs_dim, 6, reps, 2))?)
 }
 
 /// Generations timed by `bench es` (without gradient updates, so the policies stay random).
 const ES_BENCH_GENERATIONS: usize = 5;
 
-/// Times one ES generation's evaluation (no gradient updates) at `threads` threads.
+/// Times ES generations' evaluation (no gradient updates) at `threads` threads: seconds per
+/// generation and environment steps per generation, over [`ES_BENCH_GENERATIONS`].
 fn es_generation_s(preset: Preset, threads: usize) -> Result<(f64, u64)> {
     let mut cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, preset);
     cfg.inner_cycles = 0;
     cfg.rl.warm_start = 0;
     let envs = build::envs(cfg.env, &cfg.walk)?;
-    let AnyLearner::Hybrid(mut h) = build::learner(&cfg, &envs, threads)? else {
+    let AnyLearner::Hybrid(mut h) = build::learner(&cfg, &envs)? else {
         anyhow::bail!("an ES agent builds a hybrid learner");
     };
+    let pool = build::pool(threads)?;
     let t = Instant::now();
-    h.step()?;
-    Ok((t.elapsed().as_secs_f64(), h.env_steps()))
+    for _ in 0..ES_BENCH_GENERATIONS {
+        pool.install(|| h.step())?;
+    }
+    let n = ES_BENCH_GENERATIONS as f64;
+    Ok((
+        t.elapsed().as_secs_f64() / n,
+        h.env_steps() / ES_BENCH_GENERATIONS as u64,
+    ))
+}
+
+/// Whole generations timed by `bench es`, after one untimed.
+const WHOLE_GENERATIONS: usize = 2;
+
+/// Seconds per whole ES-SAC generation of `preset` at `threads` threads, as `esrl train` runs
+/// it: the warm start, one generation untimed, then the mean of [`WHOLE_GENERATIONS`]
+/// (rollouts, ES update and inner cycles, pipelined, on one pool).
+fn whole_generation_s(preset: Preset, threads: usize) -> Result<f64> {
+    let cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, preset);
+    let envs = build::envs(cfg.env, &cfg.walk)?;
+    let AnyLearner::Hybrid(mut h) = build::learner(&cfg, &envs)? else {
+        anyhow::bail!("an ES agent builds a hybrid learner");
+    };
+    let pool = build::pool(threads)?;
+    pool.install(|| {
+        h.prepare(envs.make.as_ref())?;
+        h.step()?;
+        let t = Instant::now();
+        for _ in 0..WHOLE_GENERATIONS {
+            h.step()?;
+        }
+        Ok(t.elapsed().as_secs_f64() / WHOLE_GENERATIONS as f64)
+    })
 }
 
 /// Runs `esrl bench`.
@@ -69,8 +104,8 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             let r = esrl_nn::bench::run(&esrl_nn::bench::BenchConfig::default())?;
             let c = &r.config;
             // The full update is training's own (`Agent::update`), on the same shapes.
-            let lstm = update_ms(Arch::Lstm, c.obs_dim, c.reps)?;
-            let mlp = update_ms(Arch::Mlp, c.obs_dim, c.reps * 5)?;
+            let lstm = update_ms(Arch::Lstm, c.obs_dim, c.reps, 1)?;
+            let mlp = update_ms(Arch::Mlp, c.obs_dim, c.reps * 5, 1)?;
             let ms = |t: &UpdateTiming| format!("{:.1} ms", t.ms_per_update);
             let text = format!(
                 "forward + backward on {} × {} steps, one thread:\n  \
@@ -96,11 +131,16 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             }
             emit(*json, &value, text)
         }
-        BenchWhat::Update { arch, json } => {
-            let t = update_ms(*arch, 31, 7)?;
+        BenchWhat::Update {
+            arch,
+            threads,
+            json,
+        } => {
+            let t = update_ms(*arch, 31, 7, *threads)?;
             let arch = format!("{arch:?}").to_lowercase();
             let text = format!(
-                "one SAC update ({arch}): {:.2} ms median over {} reps (actor {} params, critic {} params)",
+                "one SAC update ({arch}, {threads} thread(s)): {:.2} ms median over {} reps \
+                 (actor {} params, critic {} params)",
                 t.ms_per_update, t.reps, t.actor_params, t.critic_params
             );
             let r = json!({
@@ -110,7 +150,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                 "reps": t.reps,
                 "actor_params": t.actor_params,
                 "critic_params": t.critic_params,
-                "threads": 1,
+                "threads": threads,
             });
             emit(*json, &r, text)
         }
@@ -128,8 +168,11 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             } else {
                 Arch::Mlp
             };
-            let upd = update_ms(arch, 31, 3)?.ms_per_update;
+            let upd = update_ms(arch, 31, 3, 1)?.ms_per_update;
+            let upd_n = update_ms(arch, 31, 3, *threads)?.ms_per_update;
             let train_s = upd * cfg.inner_cycles as f64 / 1e3;
+            let g1 = whole_generation_s(*preset, 1)?;
+            let gn = whole_generation_s(*preset, *threads)?;
             let r = json!({
                 "preset": format!("{preset:?}").to_lowercase(),
                 "population": cfg.es.population,
@@ -141,12 +184,25 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                 "parallel_efficiency": eff,
                 "inner_cycles": cfg.inner_cycles,
                 "update_ms": upd,
+                "update_ms_n_threads": upd_n,
                 "train_s_per_generation": train_s,
+                "generation_s_1_thread": g1,
+                "generation_s_n_threads": gn,
+                "generation_speedup": g1 / gn,
             });
             let text = format!(
-                "one generation ({} individuals, {steps} env steps, mean of {ES_BENCH_GENERATIONS}): {t1:.3} s on 1 thread, {tn:.3} s on {threads} (efficiency {:.0}%); \
-                 {} inner updates ≈ {train_s:.2} s",
-                cfg.es.population, eff * 100.0, cfg.inner_cycles
+                "rollouts of one generation ({} individuals, {steps} env steps, mean of \
+                 {ES_BENCH_GENERATIONS}, no training): {t1:.3} s on 1 thread, {tn:.3} s on \
+                 {threads} (efficiency {:.0}%)\n\
+                 one SAC update: {upd:.2} ms on 1 thread, {upd_n:.2} ms on {threads}; {} inner \
+                 updates ≈ {train_s:.2} s on 1 thread\n\
+                 whole generation as `esrl train` runs it (rollouts + training, mean of \
+                 {WHOLE_GENERATIONS} after one): {g1:.2} s on 1 thread, {gn:.2} s on {threads} \
+                 ({:.2}×)",
+                cfg.es.population,
+                eff * 100.0,
+                cfg.inner_cycles,
+                g1 / gn
             );
             emit(*json, &r, text)
         }

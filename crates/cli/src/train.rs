@@ -169,7 +169,7 @@ pub fn human_duration(seconds: f64) -> String {
 pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> Result<bool> {
     let envs = build::envs(cfg.env, &cfg.walk)?;
     cfg.check_memory(envs.obs_dim, envs.act_dim, envs.max_episode_steps)?;
-    let learner = build::learner(cfg, &envs, cfg.threads)?;
+    let learner = build::learner(cfg, &envs)?;
     learner.visit(Drive {
         cfg,
         root,

@@ -111,14 +111,17 @@ pub trait Evaluator: Send + Sync + fmt::Debug {
     fn evaluate(&self, generation: &Generation) -> Result<Vec<Evaluation>, AgentError>;
 }
 
-/// Evaluates on a rayon pool of this process, one fresh environment per individual.
+/// Evaluates on a rayon pool of this process, one fresh environment per individual: a pool
+/// of its own, or the pool it is called from (where the learner's updates run too, so the
+/// rollouts and the updates share its threads).
 pub struct LocalEvaluator {
     make_env: Arc<MakeEnv>,
-    pool: rayon::ThreadPool,
+    pool: Option<rayon::ThreadPool>,
 }
 
 impl LocalEvaluator {
-    /// An evaluator on `threads` threads (at least one) taking environments from `make_env`.
+    /// An evaluator on a pool of its own of `threads` threads (at least one) taking
+    /// environments from `make_env`.
     pub fn new(
         make_env: Arc<MakeEnv>,
         threads: usize,
@@ -126,21 +129,33 @@ impl LocalEvaluator {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads.max(1))
             .build()?;
-        Ok(Self { make_env, pool })
+        Ok(Self {
+            make_env,
+            pool: Some(pool),
+        })
+    }
+
+    /// An evaluator on the rayon pool it is called from (rayon's global pool outside any).
+    pub fn on_calling_pool(make_env: Arc<MakeEnv>) -> Self {
+        Self {
+            make_env,
+            pool: None,
+        }
     }
 }
 
 impl fmt::Debug for LocalEvaluator {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let threads = self.pool.as_ref().map(|p| p.current_num_threads());
         f.debug_struct("LocalEvaluator")
-            .field("threads", &self.pool.current_num_threads())
+            .field("threads", &threads)
             .finish()
     }
 }
 
 impl Evaluator for LocalEvaluator {
     fn evaluate(&self, generation: &Generation) -> Result<Vec<Evaluation>, AgentError> {
-        let evaluated: Vec<Result<Evaluation, AgentError>> = self.pool.install(|| {
+        let run = || -> Vec<Result<Evaluation, AgentError>> {
             generation
                 .genomes
                 .par_iter()
@@ -149,7 +164,11 @@ impl Evaluator for LocalEvaluator {
                     rollout_genome(&generation.policy, genome, env.as_mut())
                 })
                 .collect()
-        });
+        };
+        let evaluated = match &self.pool {
+            Some(pool) => pool.install(run),
+            None => run(),
+        };
         evaluated.into_iter().collect()
     }
 }

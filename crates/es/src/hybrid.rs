@@ -32,11 +32,20 @@
 //! Results do not depend on the thread count or on the evaluator: every individual's
 //! rollouts use the random streams its genome names, and results are taken in individual
 //! order.
+//!
+//! **Pipelining.** The N − 1 perturbations of generation g + 1 depend only on the ES mean and
+//! σ after generation g's step 3, not on the learner, so [`Hybrid::step`] rolls them out
+//! while step 5 trains (both on the rayon pool it runs in); only individual 0, the trained
+//! actor, waits for the training. Their transitions still enter the buffer at generation
+//! g + 1's step 3, in individual order, so the loop computes exactly what the sequential one
+//! does ([`Hybrid::set_pipelined`] turns it off; `es/tests/pipeline.rs` compares the two).
+//! The rollouts in flight are not part of a checkpoint: a run restored at a generation
+//! boundary rolls them out again, with the same result.
 
 use crate::evaluate::{Evaluation, Evaluator, Generation, Genome, RolloutSpec};
 use crate::strategy::{rank, EsConfig, Fitness, LoopOrder, Strategy};
 use esrl_agents::learner::{Learner, LearnerState, Row};
-use esrl_agents::{ActMode, Agent, AgentError, ReplayBuffer, Trainer};
+use esrl_agents::{ActMode, Agent, AgentError, LossMeans, ReplayBuffer, Trainer};
 use esrl_sim::MakeEnv;
 use esrl_streams::Stream;
 use serde::{Deserialize, Serialize};
@@ -192,6 +201,19 @@ pub struct Hybrid {
     rl_trained: bool,
     stats: LoopStats,
     evaluator: Arc<dyn Evaluator>,
+    /// Whether [`Hybrid::step`] rolls the next perturbations out during the training.
+    pipelined: bool,
+    /// The next generation's perturbations and their evaluations, rolled out during the
+    /// last training.
+    prefetched: Option<Prefetched>,
+}
+
+/// Individuals 1.. of a generation, evaluated ahead of it.
+#[derive(Debug, Clone)]
+struct Prefetched {
+    generation: usize,
+    genomes: Vec<Genome>,
+    evaluations: Vec<Evaluation>,
 }
 
 /// The tensor of a checkpoint that holds the ES mean θ.
@@ -219,7 +241,23 @@ impl Hybrid {
             rl_trained: false,
             stats: LoopStats::default(),
             evaluator,
+            pipelined: true,
+            prefetched: None,
         }
+    }
+
+    /// Whether [`Hybrid::step`] pipelines (default true): rolls the next generation's
+    /// perturbations out while the inner cycles train. Results are the same either way.
+    pub fn set_pipelined(&mut self, on: bool) {
+        self.pipelined = on;
+        if !on {
+            self.prefetched = None;
+        }
+    }
+
+    /// Whether [`Hybrid::step`] pipelines.
+    pub fn pipelined(&self) -> bool {
+        self.pipelined
     }
 
     /// The RL side: agent, replay buffer, random stream, step counter.
@@ -332,7 +370,28 @@ impl Hybrid {
     /// Step 1: the generation to evaluate, each genome with its action stream, the
     /// generation's K initial states and the rollouts of `es.fitness`.
     pub fn ask(&self) -> Generation {
-        let (seed, gen) = (self.trainer.seed(), self.generation as u64);
+        Generation {
+            index: self.generation,
+            policy: self.trainer.agent().policy(),
+            genomes: self.genomes(self.generation, self.population()),
+        }
+    }
+
+    /// Generation `gen`'s individuals 1.. (the perturbations of the current ES mean), ready
+    /// to roll out: valid once the ES update of generation `gen − 1` is done.
+    fn perturbations(&self, gen: usize) -> Vec<Genome> {
+        let params = (1..self.es.population).map(|i| self.strategy.perturbation(i));
+        let mut genomes = self.genomes(gen, std::iter::once(Vec::new()).chain(params));
+        genomes.remove(0);
+        genomes
+    }
+
+    /// Genomes of generation `gen` with parameters `params`, in individual order from 0,
+    /// each with its action stream, the generation's K initial states and the rollouts of
+    /// `es.fitness`.
+    fn genomes(&self, gen: usize, params: impl IntoIterator<Item = Vec<f32>>) -> Vec<Genome> {
+        let seed = self.trainer.seed();
+        let gen = gen as u64;
         let k = self.es.evaluations as u64;
         let env_seeds: Vec<u64> = (0..k)
             .map(|evaluation| {
@@ -345,8 +404,7 @@ impl Hybrid {
             })
             .collect();
         let rollouts = self.rollout_plan();
-        let genomes = self
-            .population()
+        params
             .into_iter()
             .enumerate()
             .map(|(index, params)| Genome {
@@ -360,12 +418,7 @@ impl Hybrid {
                 env_seeds: env_seeds.clone(),
                 rollouts: rollouts.clone(),
             })
-            .collect();
-        Generation {
-            index: self.generation,
-            policy: self.trainer.agent().policy(),
-            genomes,
-        }
+            .collect()
     }
 
     /// Steps 3–5 on the evaluations of [`Hybrid::ask`]'s generation, in individual order:
@@ -375,6 +428,17 @@ impl Hybrid {
         &mut self,
         generation: &Generation,
         evaluated: Vec<Evaluation>,
+    ) -> Result<GenerationReport, AgentError> {
+        self.tell_then(generation, evaluated, false)
+    }
+
+    /// [`Hybrid::tell`]; with `prefetch`, the next generation's perturbations roll out on
+    /// the evaluator while the inner cycles train.
+    fn tell_then(
+        &mut self,
+        generation: &Generation,
+        evaluated: Vec<Evaluation>,
+        prefetch: bool,
     ) -> Result<GenerationReport, AgentError> {
         let genomes = &generation.genomes;
         let n = genomes.len();
@@ -421,10 +485,10 @@ impl Hybrid {
                 if replaced {
                     self.trainer.agent_mut().set_genome(&genomes[best].params)?;
                 }
-                self.trainer.train(self.cycles(steps))?
+                self.train(self.cycles(steps), prefetch)?
             }
             LoopOrder::TrainThenReplace => {
-                let losses = self.trainer.train(self.cycles(steps))?;
+                let losses = self.train(self.cycles(steps), prefetch)?;
                 if replaced {
                     self.trainer.agent_mut().set_genome(&genomes[best].params)?;
                 }
@@ -465,11 +529,52 @@ impl Hybrid {
         Ok(report)
     }
 
-    /// Runs one generation: [`Hybrid::ask`], the evaluator, [`Hybrid::tell`].
+    /// Step 5: `cycles` inner updates; with `prefetch`, beside them on the rayon pool, the
+    /// rollouts of the next generation's perturbations (kept for [`Hybrid::step`]; an
+    /// evaluation error there surfaces when that generation is evaluated again).
+    fn train(&mut self, cycles: usize, prefetch: bool) -> Result<LossMeans, AgentError> {
+        if !prefetch || self.es.population < 2 {
+            return self.trainer.train(cycles);
+        }
+        let next = Generation {
+            index: self.generation + 1,
+            policy: self.trainer.agent().policy(),
+            genomes: self.perturbations(self.generation + 1),
+        };
+        let evaluator = Arc::clone(&self.evaluator);
+        let trainer = &mut self.trainer;
+        let (losses, evaluated) =
+            rayon::join(|| trainer.train(cycles), || evaluator.evaluate(&next));
+        self.prefetched = evaluated.ok().map(|evaluations| Prefetched {
+            generation: next.index,
+            genomes: next.genomes,
+            evaluations,
+        });
+        losses
+    }
+
+    /// Runs one generation: [`Hybrid::ask`], the evaluator, [`Hybrid::tell`], pipelined
+    /// (module docs) unless turned off: individuals 1.. come from the rollouts made during
+    /// the last generation's training when they are this generation's.
     pub fn step(&mut self) -> Result<GenerationReport, AgentError> {
         let generation = self.ask();
-        let evaluated = self.evaluator.evaluate(&generation)?;
-        self.tell(&generation, evaluated)
+        let evaluated = match self.prefetched.take() {
+            Some(p)
+                if p.generation == generation.index
+                    && generation.genomes.get(1..) == Some(&p.genomes[..]) =>
+            {
+                let first = Generation {
+                    index: generation.index,
+                    policy: generation.policy.clone(),
+                    genomes: generation.genomes[..1].to_vec(),
+                };
+                let mut evaluated = self.evaluator.evaluate(&first)?;
+                evaluated.extend(p.evaluations);
+                evaluated
+            }
+            _ => self.evaluator.evaluate(&generation)?,
+        };
+        self.tell_then(&generation, evaluated, self.pipelined)
     }
 }
 
@@ -589,6 +694,7 @@ impl Learner for Hybrid {
         tensors: &HashMap<String, Vec<f32>>,
         buffer: ReplayBuffer,
     ) -> Result<(), AgentError> {
+        self.prefetched = None;
         let mean = tensors.get(ES_MEAN).ok_or_else(|| AgentError::State {
             field: ES_MEAN.into(),
             reason: "the checkpoint lacks this tensor".into(),

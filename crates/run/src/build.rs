@@ -117,19 +117,29 @@ impl AnyLearner {
     }
 }
 
-/// A fresh learner of `cfg`: the hybrid loop evaluates its populations on `threads` local
-/// threads (one per core when 0).
-pub fn learner(cfg: &TrainConfig, envs: &Envs, threads: usize) -> Result<AnyLearner> {
+/// The thread pool a run computes on, `threads` threads (one per core when 0): the hybrid
+/// loop's rollouts and every learner's updates (their large products) share it. Results do
+/// not depend on its size.
+pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
+    let threads = if threads == 0 {
+        std::thread::available_parallelism().map_or(1, |n| n.get())
+    } else {
+        threads
+    };
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(Error::other)
+        .context("starting the thread pool")
+}
+
+/// A fresh learner of `cfg`. It computes on the rayon pool it is stepped in ([`pool`]; the
+/// training session installs one of `cfg.threads`): the hybrid loop evaluates its populations
+/// there.
+pub fn learner(cfg: &TrainConfig, envs: &Envs) -> Result<AnyLearner> {
     let agent = agent(cfg, envs)?;
     Ok(if cfg.agent.is_hybrid() {
-        let threads = if threads == 0 {
-            std::thread::available_parallelism().map_or(1, |n| n.get())
-        } else {
-            threads
-        };
-        let evaluator = LocalEvaluator::new(envs.make.clone(), threads)
-            .map_err(Error::other)
-            .context("starting the rollout thread pool")?;
+        let evaluator = LocalEvaluator::on_calling_pool(envs.make.clone());
         let mut hybrid = Hybrid::new(
             agent,
             cfg.es.clone(),

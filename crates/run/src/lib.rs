@@ -31,7 +31,7 @@
 //!
 //! let cfg = TrainConfig::resolve(AgentKind::EsSac, &Overrides::default(), Some(0))?;
 //! let envs = build::envs(cfg.env, &cfg.walk)?;
-//! build::learner(&cfg, &envs, 0)?.visit(Train(&cfg, &envs))?;
+//! build::learner(&cfg, &envs)?.visit(Train(&cfg, &envs))?;
 //! # Ok::<(), esrl_run::Error>(())
 //! ```
 //!

@@ -56,6 +56,8 @@ pub struct Training<L: Learner> {
     envs: Arc<MakeEnv>,
     run: RunDir,
     state: RunState,
+    /// The threads the learner computes on (`cfg.threads`).
+    pool: rayon::ThreadPool,
     started: Instant,
     /// Training seconds before this session (resumed runs).
     wall0: f64,
@@ -101,6 +103,7 @@ impl<L: Learner> Training<L> {
             }
             (false, _) => (RunDir::create(root, &cfg.to_toml()?)?, Opening::New),
         };
+        let pool = crate::build::pool(cfg.threads)?;
         let started = Instant::now();
         learner.prepare(envs.as_ref())?;
         let wall0 = state.wall_s;
@@ -112,6 +115,7 @@ impl<L: Learner> Training<L> {
                 envs,
                 run,
                 state,
+                pool,
                 started,
                 wall0,
             },
@@ -157,7 +161,8 @@ impl<L: Learner> Training<L> {
     /// diverges (a non-finite loss or return) ends the session with an error that keeps the
     /// last good checkpoint.
     pub fn step(&mut self) -> Result<RowDone> {
-        let row = match self.learner.run_row(self.envs.as_ref()) {
+        let (learner, envs) = (&mut self.learner, self.envs.as_ref());
+        let row = match self.pool.install(|| learner.run_row(envs)) {
             Ok(row) if !row.curve().is_finite() => Err(AgentError::NonFinite {
                 what: "return",
                 update: self.learner.agent().updates(),
