@@ -28,7 +28,12 @@
 //! # Ok::<(), esrl_agents::AgentError>(())
 //! ```
 //!
-//! Limitations: single-threaded updates (parallelism belongs to rollouts); the burn-in runs
+//! Threads: an update runs on the rayon pool it is called in; the critics (and the target
+//! critics) train side by side, and large products split by output rows, so the result is
+//! the same at any pool size. The actor's loss, through both critics, is one graph on the
+//! calling thread.
+//!
+//! Limitations: the burn-in runs
 //! one step at a time without gradients; recurrent state is not stored in the buffer (burn-in
 //! rebuilds it from the preceding steps of the same episode).
 

@@ -19,7 +19,7 @@ struct Remote;
 impl Evaluator for Remote {
     fn evaluate(&self, generation: &Generation) -> Result<Vec<Evaluation>, AgentError> {
         let mut results: Vec<Option<Evaluation>> = vec![None; generation.genomes.len()];
-        for genome in generation.genomes.iter().rev() {
+        for (at, genome) in generation.genomes.iter().enumerate().rev() {
             let wire = serde_json::to_string(genome).unwrap();
             let policy = generation.policy.clone();
             let evaluation = std::thread::spawn(move || {
@@ -28,7 +28,7 @@ impl Evaluator for Remote {
             })
             .join()
             .unwrap()?;
-            results[genome.index] = Some(evaluation);
+            results[at] = Some(evaluation);
         }
         Ok(results.into_iter().map(|r| r.unwrap()).collect())
     }

@@ -14,8 +14,9 @@
 //! - [`Actor::step`] for rollouts: one observation at a time, no graph, no allocation.
 //!
 //! Matrices are row-major; a batch of B sequences × T steps is a `(T·B, D)` matrix in
-//! **time-major** order (row `t·B + b`), see [`Tensor`]. Products go through faer,
-//! single-threaded.
+//! **time-major** order (row `t·B + b`), see [`Tensor`]. Products go through faer;
+//! large ones are split by output rows or columns over the threads of the rayon pool they
+//! run in, never along the summed dimension, so results do not depend on the thread count.
 //!
 //! # The pieces of an update
 //!
@@ -101,7 +102,8 @@
 //!
 //! # Speed
 //!
-//! All products are faer's (AVX-512/AVX2 kernels chosen at runtime), single-threaded; the
+//! All products are faer's (AVX-512/AVX2 kernels chosen at runtime), each block on one
+//! thread (products of ≥ 2²² multiply-adds are split into one block per pool thread); the
 //! LSTM's input projection for all T steps is one product, BPTT runs inside one op, the
 //! cell's nonlinearities are vectorised rational/polynomial approximations, and large
 //! buffers are recycled through a per-thread pool so steady-state updates do not fault pages
@@ -115,7 +117,8 @@
 //!   across CPUs with different SIMD widths (faer picks different kernels).
 //! - One LSTM layer per network and one bias vector per LSTM (PyTorch has two; load ours
 //!   into PyTorch as `bias_ih = bias`, `bias_hh = 0`).
-//! - Single-threaded by design: parallelism belongs to the rollouts and the population.
+//! - Only the matrix products use more than one thread; the LSTM cell, the element-wise ops
+//!   and Adam run on the calling thread.
 //! - Shape errors between ops are programming errors and panic with the shapes; file, config
 //!   and flat-vector errors are [`NnError`]s.
 
