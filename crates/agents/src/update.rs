@@ -252,48 +252,120 @@ impl Agent {
     /// - SAC (eq. 5): L(π) = 1/M Σ m·(α log π(ã|s) − minₖ Qₖ(s, ã)), ã ~ π(·|s) re-sampled;
     /// - TD3/DDPG: L(μ) = −1/M Σ m·Q₁(s, μ(s)).
     ///
-    /// Then α's step (SAC).
+    /// Then α's step (SAC). The graph is cut at the action so the critics run side by side on
+    /// the rayon pool: the actor's graph gives ã (and log π); each critic's own graph gives
+    /// Qₖ(s, ã) with ã as a leaf; a small graph gives the loss, its value and its gradients
+    /// with respect to min Qₖ and log π; the minimum's derivative goes to the critic it chose
+    /// (ties to the first, as [`Graph::minimum`]); each critic's graph turns it into
+    /// ∂L/∂ã; their sum, last critic first as one graph's reverse pass would add them, and
+    /// ∂L/∂log π seed the actor's reverse pass. The same numbers as one graph of the whole loss.
     fn train_actor(&mut self, p: &Trained, st: &BurnIn) -> Result<f64, AgentError> {
         let batch = p.batch.max(1);
         let stochastic = self.has_entropy();
+        // SAC takes the minimum of its critics; TD3 and DDPG follow Q₁.
+        let used = if stochastic { self.critics.len() } else { 1 };
         let (mut grads, loss, log_prob) = {
-            let mut g = Graph::new();
-            for c in &self.critics {
-                g.freeze(c.params());
-            }
-            let ov = g.constant(p.obs.clone());
-            let mv = g.constant(p.mask.clone());
-            let out = self.actor.forward(&mut g, ov, batch, st.actor.as_ref());
+            let mut ga = Graph::new();
+            let ov = ga.constant(p.obs.clone());
+            let out = self.actor.forward(&mut ga, ov, batch, st.actor.as_ref());
             let (act, log_prob) = if stochastic {
-                let s = self.actor.sample(&mut g, &out, &mut self.rng);
+                let s = self.actor.sample(&mut ga, &out, &mut self.rng);
                 (s.action, Some(s.log_prob))
             } else {
-                (self.actor.deterministic(&mut g, &out), None)
+                (self.actor.deterministic(&mut ga, &out), None)
             };
-            // SAC takes the minimum of its critics; TD3 and DDPG follow Q₁.
-            let critics = if stochastic { self.critics.len() } else { 1 };
-            let mut qmin = None;
-            for (k, c) in self.critics.iter().take(critics).enumerate() {
-                let q = c.forward(&mut g, ov, act, batch, st.critics[k].as_ref()).q;
-                qmin = Some(match qmin {
-                    None => q,
-                    Some(m) => g.minimum(m, q),
-                });
-            }
-            let qmin = qmin.expect("at least one critic");
-            let per_step = match log_prob {
-                Some(lp) => {
-                    let alp = g.scale(lp, p.alpha);
-                    g.sub(alp, qmin)
+            let action = ga.value(act).clone();
+
+            // Each critic on its own graph: Qₖ(s, ã) with ã a leaf.
+            let mut critic_graphs: Vec<_> = self.critics[..used]
+                .par_iter()
+                .zip(&st.critics)
+                .map(|(c, state)| {
+                    let mut g = Graph::new();
+                    g.freeze(c.params());
+                    let o = g.constant(p.obs.clone());
+                    let a = g.leaf(action.clone());
+                    let q = c.forward(&mut g, o, a, batch, state.as_ref()).q;
+                    (g, a, q)
+                })
+                .collect();
+
+            // min Qₖ, and which critic each element's minimum came from.
+            let mut qmin = critic_graphs[0].0.value(critic_graphs[0].2).clone();
+            let mut chosen = vec![0usize; qmin.len()];
+            for (k, (g, _, q)) in critic_graphs.iter().enumerate().skip(1) {
+                for ((m, c), &x) in qmin
+                    .data_mut()
+                    .iter_mut()
+                    .zip(&mut chosen)
+                    .zip(g.value(*q).data())
+                {
+                    // `Graph::minimum`'s rule: the earlier operand unless it is not ≤ the
+                    // later one (NaN included).
+                    if (*m)
+                        .partial_cmp(&x)
+                        .is_none_or(|o| o == std::cmp::Ordering::Greater)
+                    {
+                        *c = k;
+                    }
+                    *m = m.min(x);
                 }
-                None => g.neg(qmin),
+            }
+
+            // The loss from min Q and log π.
+            let mut gl = Graph::new();
+            let qv = gl.leaf(qmin);
+            let mv = gl.constant(p.mask.clone());
+            let lpv = log_prob.map(|lp| gl.leaf(ga.value(lp).clone()));
+            let per_step = match lpv {
+                Some(lp) => {
+                    let alp = gl.scale(lp, p.alpha);
+                    gl.sub(alp, qv)
+                }
+                None => gl.neg(qv),
             };
-            let masked = g.mul(per_step, mv);
-            let s = g.sum(masked);
-            let loss = g.scale(s, p.norm);
-            let lv = g.value(loss).item();
-            let lp_values = log_prob.map(|lp| g.value(lp).clone());
-            (g.backward(loss), lv, lp_values)
+            let masked = gl.mul(per_step, mv);
+            let s = gl.sum(masked);
+            let loss = gl.scale(s, p.norm);
+            let lv = gl.value(loss).item();
+            let dl = gl.backward(loss);
+            let dq = dl
+                .var(qv)
+                .cloned()
+                .unwrap_or_else(|| Tensor::zeros(p.mask.rows(), p.mask.cols()));
+
+            // ∂L/∂ã through each critic, from the share of ∂L/∂min Q it chose.
+            let dacts: Vec<Tensor> = critic_graphs
+                .par_iter_mut()
+                .enumerate()
+                .map(|(k, (g, a, q))| {
+                    let mut seed = Tensor::zeros(dq.rows(), dq.cols());
+                    for ((s, &d), &c) in seed.data_mut().iter_mut().zip(dq.data()).zip(&chosen) {
+                        *s += if c == k { d } else { 0.0 };
+                    }
+                    let grads = g.backward_with(*q, seed);
+                    grads
+                        .var(*a)
+                        .cloned()
+                        .unwrap_or_else(|| Tensor::zeros(action.rows(), action.cols()))
+                })
+                .collect();
+            let mut dact = dacts.last().expect("at least one critic").clone();
+            for d in dacts.iter().rev().skip(1) {
+                for (x, &y) in dact.data_mut().iter_mut().zip(d.data()) {
+                    *x += y;
+                }
+            }
+            drop(critic_graphs);
+
+            let mut seeds = vec![(act, dact)];
+            if let (Some(lp), Some(lpv)) = (log_prob, lpv) {
+                if let Some(d) = dl.var(lpv) {
+                    seeds.push((lp, d.clone()));
+                }
+            }
+            let lp_values = log_prob.map(|lp| ga.value(lp).clone());
+            (ga.backward_seeded(seeds), lv, lp_values)
         };
         if !loss.is_finite() {
             return Err(AgentError::NonFinite {

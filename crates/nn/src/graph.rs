@@ -282,21 +282,32 @@ impl<'a> Graph<'a> {
 
     /// Reverse pass seeded with `seed` = d loss / d `out` (same shape as `out`).
     pub fn backward_with(&mut self, out: Var, seed: Tensor) -> Gradients {
-        assert_eq!(
-            self.shape(out),
-            seed.shape(),
-            "Graph::backward_with: seed shape"
-        );
+        self.backward_seeded(vec![(out, seed)])
+    }
+
+    /// Reverse pass seeded at several values: each `(v, d loss / d v)`, as if the rest of
+    /// the loss were computed elsewhere (e.g. on another graph, on another thread). Each seed
+    /// is that value's whole gradient, as the reverse pass would have accumulated it.
+    ///
+    /// # Panics
+    /// If a seed's shape differs from its value's, or a value is seeded twice.
+    pub fn backward_seeded(&mut self, seeds: Vec<(Var, Tensor)>) -> Gradients {
+        let mut grads: Vec<Option<Tensor>> = (0..self.nodes.len()).map(|_| None).collect();
+        let mut last = 0;
+        for (v, seed) in seeds {
+            assert_eq!(self.shape(v), seed.shape(), "Graph::backward: seed shape");
+            assert!(grads[v.0].is_none(), "Graph::backward: {v:?} seeded twice");
+            if self.nodes[v.0].requires_grad {
+                grads[v.0] = Some(seed);
+            }
+            last = last.max(v.0);
+        }
         let mut pgrads: Vec<Option<Vec<f32>>> = self
             .bindings
             .iter()
             .map(|b| b.trainable.then(|| crate::pool::zeros(b.params.len())))
             .collect();
-        let mut grads: Vec<Option<Tensor>> = (0..self.nodes.len()).map(|_| None).collect();
-        if self.nodes[out.0].requires_grad {
-            grads[out.0] = Some(seed);
-        }
-        for i in (0..=out.0).rev() {
+        for i in (0..=last).rev() {
             let Some(dy) = grads[i].take() else { continue };
             let node = &self.nodes[i];
             if !node.requires_grad {
