@@ -417,11 +417,13 @@ impl Agent {
     }
 
     /// Runs the burn-in prefix without gradients and returns every network's state at the
-    /// start of the trained part.
+    /// start of the trained part. Each network runs its own prefix (on the rayon pool, side
+    /// by side): the actor, each critic, the actor that picks a′ at s′ (drawing its samples
+    /// from the agent's stream, step by step as before), then each target critic on those a′.
     fn burn_in(&mut self, batch: &SequenceBatch) -> BurnIn {
         let b = batch.batch;
         let (o, a) = (self.obs_dim, self.act_dim);
-        let mut st = BurnIn {
+        let zero = BurnIn {
             actor: self.actor.zero_state(b),
             actor_next: self.actor.zero_state(b),
             critics: self.critics.iter().map(|c| c.zero_state(b)).collect(),
@@ -431,41 +433,100 @@ impl Agent {
                 .map(|c| c.zero_state(b))
                 .collect(),
         };
-        let recurrent = st.actor.is_some() || st.critics.iter().any(Option::is_some);
+        let recurrent = zero.actor.is_some() || zero.critics.iter().any(Option::is_some);
         if !recurrent {
-            return st;
+            return zero;
         }
-        for t in 0..=batch.burn_in {
-            let reset = &batch.reset[t * b..(t + 1) * b];
-            apply_resets(&mut st.actor, reset);
-            apply_resets(&mut st.actor_next, reset);
-            for s in st.critics.iter_mut().chain(st.critic_targets.iter_mut()) {
-                apply_resets(s, reset);
-            }
-            if t == batch.burn_in {
-                break;
-            }
-            let mut g = Graph::no_grad();
-            let ov = g.constant(steps(&batch.obs, b, o, t, t + 1));
-            let av = g.constant(steps(&batch.action, b, a, t, t + 1));
-            let o2 = g.constant(steps(&batch.next_obs, b, o, t, t + 1));
-            st.actor = self.actor.forward(&mut g, ov, b, st.actor.as_ref()).state;
-            for (k, c) in self.critics.iter().enumerate() {
-                st.critics[k] = c.forward(&mut g, ov, av, b, st.critics[k].as_ref()).state;
-            }
-            let next_actor = self.actor_target.as_ref().unwrap_or(&self.actor);
-            let out = next_actor.forward(&mut g, o2, b, st.actor_next.as_ref());
-            st.actor_next = out.state.clone();
-            let a2 = match &self.actor_target {
-                None => self.actor.sample(&mut g, &out, &mut self.rng).action,
-                Some(target) => target.deterministic(&mut g, &out),
+        let burn = batch.burn_in;
+        let reset = |t: usize| &batch.reset[t * b..(t + 1) * b];
+        // One network's prefix: its state after the resets of steps 0..=burn and the
+        // forwards of steps 0..burn, `forward` giving the next state.
+        let prefix =
+            |mut state: Option<LstmState>,
+             forward: &mut dyn FnMut(usize, Option<&LstmState>) -> Option<LstmState>| {
+                for t in 0..=burn {
+                    apply_resets(&mut state, reset(t));
+                    if t == burn {
+                        break;
+                    }
+                    state = forward(t, state.as_ref());
+                }
+                state
             };
-            for (k, c) in self.critic_targets.iter().enumerate() {
-                st.critic_targets[k] = c
-                    .forward(&mut g, o2, a2, b, st.critic_targets[k].as_ref())
-                    .state;
-            }
+        let obs = |t: usize| steps(&batch.obs, b, o, t, t + 1);
+        let act = |t: usize| steps(&batch.action, b, a, t, t + 1);
+        let next_obs = |t: usize| steps(&batch.next_obs, b, o, t, t + 1);
+
+        let BurnIn {
+            actor: actor0,
+            actor_next: next0,
+            critics: critics0,
+            critic_targets: targets0,
+        } = zero;
+        let (actor, critics, target_actor, rng) = (
+            &self.actor,
+            &self.critics,
+            self.actor_target.as_ref(),
+            &mut self.rng,
+        );
+        // The actor that picks a′, with the a′ of every burn-in step.
+        let next_chain = || {
+            let mut picks = Vec::with_capacity(burn);
+            let next_actor = target_actor.unwrap_or(actor);
+            let state = prefix(next0, &mut |t, s| {
+                let mut g = Graph::no_grad();
+                let o2 = g.constant(next_obs(t));
+                let out = next_actor.forward(&mut g, o2, b, s);
+                let a2 = match target_actor {
+                    None => actor.sample(&mut g, &out, rng).action,
+                    Some(target) => target.deterministic(&mut g, &out),
+                };
+                picks.push(g.take_value(a2));
+                out.state
+            });
+            (state, picks)
+        };
+        let own_chains = || {
+            let actor_state = || {
+                prefix(actor0, &mut |t, s| {
+                    let mut g = Graph::no_grad();
+                    let ov = g.constant(obs(t));
+                    actor.forward(&mut g, ov, b, s).state
+                })
+            };
+            let critic_states = || -> Vec<Option<LstmState>> {
+                critics
+                    .par_iter()
+                    .zip(critics0)
+                    .map(|(c, s0)| {
+                        prefix(s0, &mut |t, s| {
+                            let mut g = Graph::no_grad();
+                            let (ov, av) = (g.constant(obs(t)), g.constant(act(t)));
+                            c.forward(&mut g, ov, av, b, s).state
+                        })
+                    })
+                    .collect()
+            };
+            rayon::join(actor_state, critic_states)
+        };
+        let ((actor_next, picks), (actor, critics)) = rayon::join(next_chain, own_chains);
+        let critic_targets = self
+            .critic_targets
+            .par_iter()
+            .zip(targets0)
+            .map(|(c, s0)| {
+                prefix(s0, &mut |t, s| {
+                    let mut g = Graph::no_grad();
+                    let (o2, a2) = (g.constant(next_obs(t)), g.constant(picks[t].clone()));
+                    c.forward(&mut g, o2, a2, b, s).state
+                })
+            })
+            .collect();
+        BurnIn {
+            actor,
+            actor_next,
+            critics,
+            critic_targets,
         }
-        st
     }
 }
