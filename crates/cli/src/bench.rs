@@ -57,13 +57,19 @@ fn es_generation_s(preset: Preset, threads: usize) -> Result<(f64, u64)> {
     ))
 }
 
-/// Whole generations timed by `bench es`, after one untimed.
-const WHOLE_GENERATIONS: usize = 2;
+/// Whole generations are timed for at least this many seconds on one thread (and as many
+/// generations on N threads).
+const WHOLE_MIN_S: f64 = 4.0;
 
 /// Seconds per whole ES-SAC generation of `preset` at `threads` threads, as `esrl train` runs
-/// it: the warm start, one generation untimed, then the mean of [`WHOLE_GENERATIONS`]
-/// (rollouts, ES update and inner cycles, pipelined, on one pool).
-fn whole_generation_s(preset: Preset, threads: usize) -> Result<f64> {
+/// it (rollouts, ES update and inner cycles, pipelined, on one pool): the warm start, one
+/// generation untimed, then the mean of `generations` (when `None`, as many as fill
+/// [`WHOLE_MIN_S`], at least 2). Returns the seconds and the generations timed.
+fn whole_generation_s(
+    preset: Preset,
+    threads: usize,
+    generations: Option<usize>,
+) -> Result<(f64, usize)> {
     let cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, preset);
     let envs = build::envs(cfg.env, &cfg.walk)?;
     let AnyLearner::Hybrid(mut h) = build::learner(&cfg, &envs)? else {
@@ -72,12 +78,15 @@ fn whole_generation_s(preset: Preset, threads: usize) -> Result<f64> {
     let pool = build::pool(threads)?;
     pool.install(|| {
         h.prepare(envs.make.as_ref())?;
-        h.step()?;
         let t = Instant::now();
-        for _ in 0..WHOLE_GENERATIONS {
+        h.step()?;
+        let first = t.elapsed().as_secs_f64();
+        let n = generations.unwrap_or_else(|| ((WHOLE_MIN_S / first).ceil() as usize).max(2));
+        let t = Instant::now();
+        for _ in 0..n {
             h.step()?;
         }
-        Ok(t.elapsed().as_secs_f64() / WHOLE_GENERATIONS as f64)
+        Ok((t.elapsed().as_secs_f64() / n as f64, n))
     })
 }
 
@@ -171,8 +180,8 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             let upd = update_ms(arch, 31, 3, 1)?.ms_per_update;
             let upd_n = update_ms(arch, 31, 3, *threads)?.ms_per_update;
             let train_s = upd * cfg.inner_cycles as f64 / 1e3;
-            let g1 = whole_generation_s(*preset, 1)?;
-            let gn = whole_generation_s(*preset, *threads)?;
+            let (g1, whole) = whole_generation_s(*preset, 1, None)?;
+            let (gn, _) = whole_generation_s(*preset, *threads, Some(whole))?;
             let r = json!({
                 "preset": format!("{preset:?}").to_lowercase(),
                 "population": cfg.es.population,
@@ -189,6 +198,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                 "generation_s_1_thread": g1,
                 "generation_s_n_threads": gn,
                 "generation_speedup": g1 / gn,
+                "generations_timed": whole,
             });
             let text = format!(
                 "rollouts of one generation ({} individuals, {steps} env steps, mean of \
@@ -197,8 +207,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                  one SAC update: {upd:.2} ms on 1 thread, {upd_n:.2} ms on {threads}; {} inner \
                  updates ≈ {train_s:.2} s on 1 thread\n\
                  whole generation as `esrl train` runs it (rollouts + training, mean of \
-                 {WHOLE_GENERATIONS} after one): {g1:.2} s on 1 thread, {gn:.2} s on {threads} \
-                 ({:.2}×)",
+                 {whole} after one): {g1:.2} s on 1 thread, {gn:.2} s on {threads} ({:.2}×)",
                 cfg.es.population,
                 eff * 100.0,
                 cfg.inner_cycles,
