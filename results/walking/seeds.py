@@ -13,6 +13,8 @@ ROWS = [
     ("1", "`best/` at 2.56 M steps (gen 315)", "runs/walking-s1/best-2.56M-eval.json"),
     ("2", "`best/` at the end (gen 304, 2.56 M steps)", "runs/walking-s2/best-eval.json"),
     ("0 (plain SAC)", "the last policy (4 M steps)", "runs/walking-sac-s0/eval.json"),
+    ("1 (plain SAC)", "the last policy (4 M steps)", "runs/walking-sac-s1/eval.json"),
+    ("2 (plain SAC)", "the last policy (4 M steps)", "runs/walking-sac-s2/eval.json"),
 ]
 
 
