@@ -11,6 +11,8 @@
 //!   [`Hybrid::step`] does all three. `Hybrid` is an [`esrl_agents::Learner`], so the same
 //!   loop that trains a plain agent drives it.
 //!
+//! - [`wire`]: genomes and evaluations as compact bytes, for evaluators in other processes.
+//!
 //! Reading ES-SAC top to bottom: `hybrid.rs` (the loop, steps 1–5), `evaluate.rs` (step 2),
 //! `strategy.rs` (step 3), then `esrl_agents`' `train.rs` (the inner cycles) and `update.rs`
 //! (the SAC update, each loss under its equation).
@@ -49,9 +51,11 @@
 pub mod evaluate;
 pub mod hybrid;
 pub mod strategy;
+pub mod wire;
 
 pub use evaluate::{
     rollout_genome, Evaluation, Evaluator, Generation, Genome, LocalEvaluator, RolloutSpec,
 };
 pub use hybrid::{EsState, GenerationReport, Hybrid, LoopStats};
 pub use strategy::{elite_weights, rank, ConfigError, EsConfig, Fitness, LoopOrder, Strategy};
+pub use wire::{decode_evaluation, decode_genome, encode_evaluation, encode_genome, WireError};
