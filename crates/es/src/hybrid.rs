@@ -373,7 +373,7 @@ impl Hybrid {
         Generation {
             index: self.generation,
             policy: self.trainer.agent().policy(),
-            genomes: self.genomes(self.generation, self.population()),
+            genomes: self.genomes(self.generation, 0, self.population()),
         }
     }
 
@@ -381,15 +381,18 @@ impl Hybrid {
     /// to roll out: valid once the ES update of generation `gen − 1` is done.
     fn perturbations(&self, gen: usize) -> Vec<Genome> {
         let params = (1..self.es.population).map(|i| self.strategy.perturbation(i));
-        let mut genomes = self.genomes(gen, std::iter::once(Vec::new()).chain(params));
-        genomes.remove(0);
-        genomes
+        self.genomes(gen, 1, params)
     }
 
-    /// Genomes of generation `gen` with parameters `params`, in individual order from 0,
-    /// each with its action stream, the generation's K initial states and the rollouts of
+    /// Genomes of generation `gen` with parameters `params`, individuals `first`, `first` + 1,
+    /// …, each with its action stream, the generation's K initial states and the rollouts of
     /// `es.fitness`.
-    fn genomes(&self, gen: usize, params: impl IntoIterator<Item = Vec<f32>>) -> Vec<Genome> {
+    fn genomes(
+        &self,
+        gen: usize,
+        first: usize,
+        params: impl IntoIterator<Item = Vec<f32>>,
+    ) -> Vec<Genome> {
         let seed = self.trainer.seed();
         let gen = gen as u64;
         let k = self.es.evaluations as u64;
@@ -407,12 +410,12 @@ impl Hybrid {
         params
             .into_iter()
             .enumerate()
-            .map(|(index, params)| Genome {
-                index,
+            .map(|(i, params)| Genome {
+                index: first + i,
                 params,
                 action_seed: Stream::Individual {
                     generation: gen,
-                    index: index as u64,
+                    index: (first + i) as u64,
                 }
                 .seed(seed),
                 env_seeds: env_seeds.clone(),
@@ -554,25 +557,33 @@ impl Hybrid {
     }
 
     /// Runs one generation: [`Hybrid::ask`], the evaluator, [`Hybrid::tell`], pipelined
-    /// (module docs) unless turned off: individuals 1.. come from the rollouts made during
-    /// the last generation's training when they are this generation's.
+    /// (module docs) unless turned off: individuals 1.. and their evaluations are those
+    /// rolled out during the last generation's training (nothing they depend on changes
+    /// between a tell and the next step; a restore drops them), so only individual 0 is
+    /// evaluated here.
     pub fn step(&mut self) -> Result<GenerationReport, AgentError> {
-        let generation = self.ask();
-        let evaluated = match self.prefetched.take() {
-            Some(p)
-                if p.generation == generation.index
-                    && generation.genomes.get(1..) == Some(&p.genomes[..]) =>
-            {
-                let first = Generation {
-                    index: generation.index,
-                    policy: generation.policy.clone(),
-                    genomes: generation.genomes[..1].to_vec(),
+        let ahead = self
+            .prefetched
+            .take()
+            .filter(|p| p.generation == self.generation);
+        let (generation, evaluated) = match ahead {
+            Some(p) => {
+                let agent = self.trainer.agent();
+                let mut generation = Generation {
+                    index: self.generation,
+                    policy: agent.policy(),
+                    genomes: self.genomes(self.generation, 0, [agent.genome()]),
                 };
-                let mut evaluated = self.evaluator.evaluate(&first)?;
+                let mut evaluated = self.evaluator.evaluate(&generation)?;
                 evaluated.extend(p.evaluations);
-                evaluated
+                generation.genomes.extend(p.genomes);
+                (generation, evaluated)
             }
-            _ => self.evaluator.evaluate(&generation)?,
+            None => {
+                let generation = self.ask();
+                let evaluated = self.evaluator.evaluate(&generation)?;
+                (generation, evaluated)
+            }
         };
         self.tell_then(&generation, evaluated, self.pipelined)
     }
