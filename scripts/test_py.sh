@@ -22,6 +22,9 @@ fi
 venv_python="$root/.venv/bin/python"
 "$venv_python" -m pip install --quiet --disable-pip-version-check \
     "maturin>=1.9.4,<2" pytest numpy gymnasium matplotlib
+# Ray is optional for users (`pip install "./py[ray]"`) but tested here: `python -m esrl_rs.ray`
+# against `esrl train` on a local cluster (py/tests/test_ray.py).
+"$venv_python" -m pip install --quiet --disable-pip-version-check "ray>=2.9"
 # pandas is optional (Run.to_pandas); its test is skipped without it.
 "$venv_python" -m pip install --quiet --disable-pip-version-check pandas \
     || echo "test_py.sh: pandas not installed; Run.to_pandas() is not tested" >&2

@@ -88,3 +88,28 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
         "unknown panic payload".to_string()
     }
 }
+
+/// An error of the run library: I/O kinds are kept, the rest is a `ValueError` (bad config,
+/// a checkpoint that does not match it), with the whole context chain.
+pub fn run_error(error: esrl_run::Error) -> PyErr {
+    let message = error.chain();
+    let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(&error);
+    let mut io_kind = None;
+    while let Some(e) = cause {
+        // A transparent `Error::Io` hands on its I/O error's source, not the error itself.
+        let io = match e.downcast_ref::<esrl_run::Error>() {
+            Some(esrl_run::Error::Io(io)) => Some(io),
+            _ => e.downcast_ref::<std::io::Error>(),
+        };
+        if let Some(io) = io {
+            io_kind = Some(io.kind());
+            break;
+        }
+        cause = e.source();
+    }
+    match io_kind {
+        Some(std::io::ErrorKind::NotFound) => PyFileNotFoundError::new_err(message),
+        Some(std::io::ErrorKind::PermissionDenied) => PyPermissionError::new_err(message),
+        _ => value_error(message),
+    }
+}

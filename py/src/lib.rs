@@ -13,10 +13,13 @@
 //! Errors become `ValueError`, `FileNotFoundError`/`OSError` or `esrl_rs.EsrlError` with the
 //! Rust message (see `errors`); simulator panics are caught and raised as `EsrlError`.
 //!
+//! - `plan_train`, `Driver`, `Worker`: training with the population rolled out by a Python
+//!   callable (`esrl_rs.ray`), through the same run folder code as `esrl train`.
 //! - `PolicyCore`: a trained policy from a run's checkpoint (via the `esrl` CLI library),
 //!   acting and rolling out deterministically like `esrl eval`.
 
 mod convert;
+mod driver;
 mod envs;
 mod errors;
 mod metrics;
@@ -37,6 +40,7 @@ fn native(module: &Bound<'_, PyModule>) -> PyResult<()> {
     recording::register(module)?;
     envs::register(module)?;
     policy::register(module)?;
+    driver::register(module)?;
     let metrics = PyModule::new(py, "metrics")?;
     metrics::register(&metrics)?;
     module.add_submodule(&metrics)?;

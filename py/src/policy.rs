@@ -8,38 +8,12 @@ use std::sync::Mutex;
 use esrl_agents::{ActMode, Policy};
 use esrl_eval::{EvalReport, LoadedRun};
 use numpy::{AllowTypeChange, PyArray1, PyArrayLike1};
-use pyo3::exceptions::{PyFileNotFoundError, PyPermissionError};
 use pyo3::prelude::*;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use crate::errors::{esrl_error, not_found, panic_message, value_error};
+use crate::errors::{esrl_error, not_found, panic_message, run_error, value_error};
 use crate::metrics::to_py;
-
-/// An error of the run library: I/O kinds are kept, the rest is a `ValueError` (bad config,
-/// a checkpoint that does not match it), with the whole context chain.
-fn run_error(error: esrl_run::Error) -> PyErr {
-    let message = error.chain();
-    let mut cause: Option<&(dyn std::error::Error + 'static)> = Some(&error);
-    let mut io_kind = None;
-    while let Some(e) = cause {
-        // A transparent `Error::Io` hands on its I/O error's source, not the error itself.
-        let io = match e.downcast_ref::<esrl_run::Error>() {
-            Some(esrl_run::Error::Io(io)) => Some(io),
-            _ => e.downcast_ref::<std::io::Error>(),
-        };
-        if let Some(io) = io {
-            io_kind = Some(io.kind());
-            break;
-        }
-        cause = e.source();
-    }
-    match io_kind {
-        Some(std::io::ErrorKind::NotFound) => PyFileNotFoundError::new_err(message),
-        Some(std::io::ErrorKind::PermissionDenied) => PyPermissionError::new_err(message),
-        _ => value_error(message),
-    }
-}
 
 /// `FileNotFoundError` for what is missing (the folder, or its checkpoint); the rest of the
 /// checks are the evaluation library's (`esrl_eval::locate`).

@@ -4,24 +4,13 @@
 
 use crate::args::{EnvKind, Preset, TrainArgs};
 use crate::signals;
-use anyhow::{bail, Result};
+use anyhow::Result;
 use esrl_agents::Learner;
-use esrl_run::checkpoint;
-use esrl_run::{build, LearnerVisitor, Opening, RunDir, TrainConfig, Training};
+use esrl_run::{build, LearnerVisitor, Opening, TrainConfig, TrainRequest, Training};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// Where a run goes by default: `runs/<agent>-s<seed>` on the walking env (the same name
-/// `esrl compare` gives its runs), `runs/<agent>-<env>-s<seed>` on another env.
-pub fn default_out(cfg: &TrainConfig) -> PathBuf {
-    let name = match cfg.env {
-        EnvKind::Walk => format!("{}-s{}", cfg.agent.name(), cfg.seed),
-        EnvKind::Pendulum => format!("{}-pendulum-s{}", cfg.agent.name(), cfg.seed),
-    };
-    PathBuf::from("runs").join(name)
-}
 
 /// How a training reports progress.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -38,62 +27,17 @@ pub enum Display {
 /// Runs `esrl train`. Returns the run folder, and whether the budget was completed (false
 /// after a stop signal).
 pub fn run(args: &TrainArgs) -> Result<(PathBuf, bool)> {
-    let (mut cfg, root, resume) = match &args.resume {
-        Some(dir) => {
-            let path = dir.join(RunDir::CONFIG);
-            if !path.exists() {
-                bail!(
-                    "{} is not a run folder (it has no {}); start a new run with --out",
-                    dir.display(),
-                    RunDir::CONFIG
-                );
-            }
-            let (cfg, legacy) = checkpoint::run_config(dir)?;
-            if cfg.agent != args.agent {
-                bail!(
-                    "{} is a {} run, not {}",
-                    dir.display(),
-                    cfg.agent.name(),
-                    args.agent.name()
-                );
-            }
-            if legacy {
-                eprintln!(
-                    "{}: a DDPG checkpoint from before DDPG honoured rl.policy_delay and \
-                     rl.target_noise; it trained with 1 and 0, and continues so (config.toml \
-                     is updated)",
-                    dir.display()
-                );
-            }
-            (cfg, dir.clone(), true)
-        }
-        None => {
-            let cfg = TrainConfig::resolve(args.agent, &args.opts.overrides(), args.seed)?;
-            let root = args.out.clone().unwrap_or_else(|| default_out(&cfg));
-            (cfg, root, false)
-        }
-    };
-    if resume {
-        // Budget and thread flags may change a resumed run; the stored config follows, so
-        // `--config RUN/config.toml` keeps repeating the run as it now is.
-        let stored = TrainConfig::load(&root.join(RunDir::CONFIG))?;
-        if let Some(g) = args.opts.generations {
-            cfg.generations = g;
-        }
-        if let Some(e) = args.opts.episodes {
-            cfg.episodes = e;
-        }
-        if let Some(s) = args.opts.steps {
-            cfg.max_env_steps = Some(s);
-        }
-        if let Some(t) = args.opts.threads {
-            cfg.threads = t;
-        }
-        cfg.validate()?;
-        if cfg != stored {
-            esrl_run::run_dir::write_atomic(&root.join(RunDir::CONFIG), cfg.to_toml()?.as_bytes())?;
-        }
+    let plan = esrl_run::plan(&TrainRequest {
+        agent: args.agent,
+        seed: args.seed,
+        out: args.out.clone(),
+        resume: args.resume.clone(),
+        overrides: args.opts.overrides(),
+    })?;
+    for note in &plan.notes {
+        eprintln!("{note}");
     }
+    let (cfg, root, resume) = (plan.cfg, plan.root, plan.resume);
     let display = if args.opts.no_progress {
         Display::Log
     } else {
@@ -199,13 +143,6 @@ impl LearnerVisitor for Drive<'_> {
             display,
             envs,
         } = self;
-        if resume && checkpoint::find(root).is_none() {
-            eprintln!(
-                "{} has no checkpoint yet (stopped before its first one): starting it over from \
-                 the beginning with its config.toml",
-                root.display()
-            );
-        }
         let (mut training, opening) =
             Training::open(cfg, root, learner, envs.make.clone(), resume)?;
         if let Opening::Resumed {

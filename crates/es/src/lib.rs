@@ -11,7 +11,9 @@
 //!   [`Hybrid::step`] does all three. `Hybrid` is an [`esrl_agents::Learner`], so the same
 //!   loop that trains a plain agent drives it.
 //!
-//! - [`wire`]: genomes and evaluations as compact bytes, for evaluators in other processes.
+//! - [`wire`]: genomes and evaluations as compact bytes, for evaluators in other processes;
+//!   [`remote`]: both ends of such an evaluator ([`WireEvaluator`] over a [`Transport`] on
+//!   the driver, [`Worker`] on the other side).
 //!
 //! Reading ES-SAC top to bottom: `hybrid.rs` (the loop, steps 1–5), `evaluate.rs` (step 2),
 //! `strategy.rs` (step 3), then `esrl_agents`' `train.rs` (the inner cycles) and `update.rs`
@@ -41,8 +43,9 @@
 //! - Results are bit-identical for a seed at any thread count and with any evaluator that
 //!   runs [`rollout_genome`] on the genomes it is given; they are not across CPUs whose SIMD
 //!   widths differ (`esrl-nn`'s products) or across versions of the simulator.
-//! - A generation waits for its slowest individual: evaluation and the inner cycles do not
-//!   overlap, and every genome of a generation is rolled out before anything is learned.
+//! - A generation waits for its slowest individual: every genome of a generation is rolled
+//!   out before anything is learned. Only the next generation's perturbations overlap the
+//!   inner cycles (pipelining, `hybrid.rs`); individual 0 waits for them.
 //! - The strategy is isotropic (one σ for every parameter, no covariance), as the paper's;
 //!   σ follows eq. 11's fixed decay rather than adapting to progress.
 //! - Fitness is the mean return of K rollouts (K = 1 by default): noisy for stochastic
@@ -50,6 +53,7 @@
 
 pub mod evaluate;
 pub mod hybrid;
+pub mod remote;
 pub mod strategy;
 pub mod wire;
 
@@ -57,5 +61,6 @@ pub use evaluate::{
     rollout_genome, Evaluation, Evaluator, Generation, Genome, LocalEvaluator, RolloutSpec,
 };
 pub use hybrid::{EsState, GenerationReport, Hybrid, LoopStats};
+pub use remote::{Traffic, Transport, WireEvaluator, Worker};
 pub use strategy::{elite_weights, rank, ConfigError, EsConfig, Fitness, LoopOrder, Strategy};
 pub use wire::{decode_evaluation, decode_genome, encode_evaluation, encode_genome, WireError};

@@ -4,7 +4,7 @@
 use crate::config::{EnvKind, TrainConfig};
 use crate::error::{Context, Error, Result};
 use esrl_agents::{Agent, Learner, Trainer};
-use esrl_es::{Hybrid, LocalEvaluator};
+use esrl_es::{Evaluator, Hybrid, LocalEvaluator, Worker};
 use esrl_sim::{Env, MakeEnv, Pendulum, RobotModel, WalkConfig, WalkEnv};
 use std::sync::Arc;
 
@@ -137,19 +137,36 @@ pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
 /// training session installs one of `cfg.threads`): the hybrid loop evaluates its populations
 /// there.
 pub fn learner(cfg: &TrainConfig, envs: &Envs) -> Result<AnyLearner> {
+    learner_with(
+        cfg,
+        envs,
+        Arc::new(LocalEvaluator::on_calling_pool(envs.make.clone())),
+    )
+}
+
+/// A fresh learner of `cfg` whose populations `evaluator` rolls out (a [`WireEvaluator`]
+/// for workers in other processes); plain learners have none and ignore it.
+///
+/// [`WireEvaluator`]: esrl_es::WireEvaluator
+pub fn learner_with(
+    cfg: &TrainConfig,
+    envs: &Envs,
+    evaluator: Arc<dyn Evaluator>,
+) -> Result<AnyLearner> {
     let agent = agent(cfg, envs)?;
     Ok(if cfg.agent.is_hybrid() {
-        let evaluator = LocalEvaluator::on_calling_pool(envs.make.clone());
-        let mut hybrid = Hybrid::new(
-            agent,
-            cfg.es.clone(),
-            cfg.inner_cycles,
-            cfg.seed,
-            Arc::new(evaluator),
-        );
+        let mut hybrid = Hybrid::new(agent, cfg.es.clone(), cfg.inner_cycles, cfg.seed, evaluator);
         hybrid.set_updates_per_step(cfg.updates_per_step);
         AnyLearner::Hybrid(Box::new(hybrid))
     } else {
         AnyLearner::Plain(Box::new(Trainer::new(agent, cfg.seed)))
     })
+}
+
+/// The worker side of a run's remote evaluation: rolls out genomes of the run configured by
+/// `cfg` ([`Worker::rollout`]) with the policy its agent would hand out.
+pub fn worker(cfg: &TrainConfig) -> Result<Worker> {
+    let envs = envs(cfg.env, &cfg.walk)?;
+    let policy = agent(cfg, &envs)?.policy();
+    Ok(Worker::new(envs.make, policy))
 }

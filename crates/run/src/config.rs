@@ -103,6 +103,9 @@ pub enum Preset {
 }
 
 impl EnvKind {
+    /// Every environment.
+    pub const ALL: [EnvKind; 2] = [EnvKind::Walk, EnvKind::Pendulum];
+
     /// The name used on the command line and in files (`walk`, `pendulum`).
     pub fn name(self) -> &'static str {
         match self {
@@ -110,9 +113,28 @@ impl EnvKind {
             EnvKind::Pendulum => "pendulum",
         }
     }
+
+    /// Parses a name as written on the command line.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|e| e.name() == name.trim())
+    }
 }
 
 impl Preset {
+    /// Every preset.
+    pub const ALL: [Preset; 5] = [
+        Preset::Paper,
+        Preset::Quick,
+        Preset::Long,
+        Preset::Walking,
+        Preset::Smoke,
+    ];
+
+    /// Parses a name as written on the command line.
+    pub fn parse(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|p| p.name() == name.trim())
+    }
+
     /// The name used on the command line and in `config.toml` (`paper`, `quick`, …).
     pub fn name(self) -> &'static str {
         match self {
@@ -381,8 +403,12 @@ impl TrainConfig {
     pub fn load(path: &Path) -> Result<Self> {
         let text =
             std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        let cfg: Self =
-            toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+        Self::from_toml(&text).with_context(|| format!("parsing {}", path.display()))
+    }
+
+    /// A whole configuration from `config.toml` text ([`TrainConfig::to_toml`]'s), checked.
+    pub fn from_toml(text: &str) -> Result<Self> {
+        let cfg: Self = toml::from_str(text)?;
         cfg.validate()?;
         Ok(cfg)
     }

@@ -6,6 +6,8 @@
 //! - [`build`]: the one place that loads the URDF and builds the environments, the agent
 //!   and the learner ([`AnyLearner`]: a plain [`esrl_agents::Trainer`] or an
 //!   [`esrl_es::Hybrid`]) of a config.
+//! - [`plan`]: a `train` command's arguments ([`TrainRequest`]) turned into a configuration
+//!   and a folder, new or resumed, for every front end.
 //! - [`training`]: [`Training`] drives any [`esrl_agents::Learner`] row by row into its
 //!   folder: metrics, summary, `RUN/best/`, checkpoints.
 //! - [`checkpoint`], [`run_dir`], [`summary`]: the files, written atomically and verified
@@ -49,6 +51,7 @@ pub mod build;
 pub mod checkpoint;
 pub mod config;
 mod error;
+pub mod plan;
 pub mod run_dir;
 pub mod summary;
 pub mod training;
@@ -56,6 +59,7 @@ pub mod training;
 pub use build::{AnyLearner, Envs, LearnerVisitor};
 pub use config::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
 pub use error::{Context, Error, Result};
+pub use plan::{default_out, plan, TrainPlan, TrainRequest};
 pub use run_dir::RunDir;
 pub use summary::Summary;
 pub use training::{Opening, RowDone, Training};

@@ -1,0 +1,123 @@
+//! What a `train` command asks for, turned into a configuration and a folder: a new run from
+//! a preset, a file and flags, or a run folder continued with the budget and thread flags
+//! applied. One implementation for every front end (`esrl train`, `python -m esrl_rs.ray
+//! train`), so a run started by one resumes in the other.
+
+use crate::bail;
+use crate::checkpoint;
+use crate::config::{AgentKind, EnvKind, Overrides, TrainConfig};
+use crate::error::Result;
+use crate::run_dir::{write_atomic, RunDir};
+use std::path::PathBuf;
+
+/// A `train` command's arguments.
+#[derive(Debug, Clone)]
+pub struct TrainRequest {
+    /// The agent.
+    pub agent: AgentKind,
+    /// Seed of every random stream (new runs).
+    pub seed: Option<u64>,
+    /// Run folder of a new run (default [`default_out`]).
+    pub out: Option<PathBuf>,
+    /// A run folder to continue from its last checkpoint.
+    pub resume: Option<PathBuf>,
+    /// Preset, config file and flags (on a resume only the budget and threads count).
+    pub overrides: Overrides,
+}
+
+/// A run ready to open with [`crate::Training::open`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrainPlan {
+    /// Its configuration (on a resume, the folder's with the new budget and threads; the
+    /// folder's `config.toml` already says so).
+    pub cfg: TrainConfig,
+    /// Its folder.
+    pub root: PathBuf,
+    /// Whether it continues an existing run.
+    pub resume: bool,
+    /// What the user should be told before it starts.
+    pub notes: Vec<String>,
+}
+
+/// Where a run goes by default: `runs/<agent>-s<seed>` on the walking env (the same name
+/// `esrl compare` gives its runs), `runs/<agent>-<env>-s<seed>` on another env.
+pub fn default_out(cfg: &TrainConfig) -> PathBuf {
+    let name = match cfg.env {
+        EnvKind::Walk => format!("{}-s{}", cfg.agent.name(), cfg.seed),
+        EnvKind::Pendulum => format!("{}-pendulum-s{}", cfg.agent.name(), cfg.seed),
+    };
+    PathBuf::from("runs").join(name)
+}
+
+/// Resolves `req`. A resume reads the folder's `config.toml` (the agent must match), applies
+/// `--generations`, `--episodes`, `--steps` and `--threads`, and writes the result back so
+/// that `--config RUN/config.toml` keeps repeating the run as it now is.
+pub fn plan(req: &TrainRequest) -> Result<TrainPlan> {
+    let Some(dir) = &req.resume else {
+        let cfg = TrainConfig::resolve(req.agent, &req.overrides, req.seed)?;
+        let root = req.out.clone().unwrap_or_else(|| default_out(&cfg));
+        return Ok(TrainPlan {
+            cfg,
+            root,
+            resume: false,
+            notes: Vec::new(),
+        });
+    };
+    let path = dir.join(RunDir::CONFIG);
+    if !path.exists() {
+        bail!(
+            "{} is not a run folder (it has no {}); start a new run with --out",
+            dir.display(),
+            RunDir::CONFIG
+        );
+    }
+    let (mut cfg, legacy) = checkpoint::run_config(dir)?;
+    if cfg.agent != req.agent {
+        bail!(
+            "{} is a {} run, not {}",
+            dir.display(),
+            cfg.agent.name(),
+            req.agent.name()
+        );
+    }
+    let mut notes = Vec::new();
+    if legacy {
+        notes.push(format!(
+            "{}: a DDPG checkpoint from before DDPG honoured rl.policy_delay and \
+             rl.target_noise; it trained with 1 and 0, and continues so (config.toml is \
+             updated)",
+            dir.display()
+        ));
+    }
+    if checkpoint::find(dir).is_none() {
+        notes.push(format!(
+            "{} has no checkpoint yet (stopped before its first one): starting it over from \
+             the beginning with its config.toml",
+            dir.display()
+        ));
+    }
+    let stored = TrainConfig::load(&path)?;
+    let o = &req.overrides;
+    if let Some(g) = o.generations {
+        cfg.generations = g;
+    }
+    if let Some(e) = o.episodes {
+        cfg.episodes = e;
+    }
+    if let Some(s) = o.steps {
+        cfg.max_env_steps = Some(s);
+    }
+    if let Some(t) = o.threads {
+        cfg.threads = t;
+    }
+    cfg.validate()?;
+    if cfg != stored {
+        write_atomic(&path, cfg.to_toml()?.as_bytes())?;
+    }
+    Ok(TrainPlan {
+        cfg,
+        root: dir.clone(),
+        resume: true,
+        notes,
+    })
+}

@@ -1,0 +1,188 @@
+"""``python -m esrl_rs.ray train AGENT``: ``esrl train`` with the population on a Ray cluster.
+
+Options are ``esrl train``'s, plus ``--address`` (``local`` starts a cluster in this process;
+``auto`` joins the one ``ray start`` runs on this machine; ``HOST:PORT`` or ``ray://HOST:PORT``
+joins a remote one) and ``--workers`` (local: the CPUs of the cluster it starts; otherwise the
+most rollouts in flight at once). The run folder is the one ``esrl train`` writes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+from typing import List, Optional
+
+AGENTS = ["es-sac", "es-td3", "es-ddpg", "sac", "td3", "ddpg"]
+PRESETS = ["paper", "quick", "long", "walking", "smoke"]
+ENVS = ["walk", "pendulum"]
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m esrl_rs.ray",
+        description="Train with the ES population rolled out on a Ray cluster; results equal "
+        "`esrl train`'s for the same settings and seed.",
+    )
+    sub = p.add_subparsers(dest="command", required=True)
+    t = sub.add_parser(
+        "train",
+        help="train an agent (the run folder of `esrl train`)",
+        description="Train an agent; hybrid agents roll their populations out on Ray tasks, "
+        "the driver runs the ES update and the gradient updates. Same files, checkpoints and "
+        "results as `esrl train`.",
+    )
+    t.add_argument("agent", choices=AGENTS)
+    t.add_argument("--seed", type=int, help="seed of every random stream in the run")
+    t.add_argument("--out", metavar="DIR", help="run folder [default: runs/<agent>-s<seed>]")
+    t.add_argument(
+        "--resume",
+        metavar="DIR",
+        help="continue the run in DIR from its last checkpoint (a run of either front end); "
+        "--generations, --episodes, --steps and --threads may change",
+    )
+    t.add_argument("--preset", choices=PRESETS, help="named settings [default: paper]")
+    t.add_argument("--config", metavar="FILE.toml", help="TOML file overriding the preset")
+    t.add_argument("--env", choices=ENVS, help="environment [default: walk]")
+    t.add_argument("--urdf", metavar="PATH", help="a URDF instead of the embedded humanoid "
+                   "(workers must be able to read it at the same path)")
+    t.add_argument("--threads", type=int,
+                   help="driver threads for the gradient updates [default: all cores]")
+    t.add_argument("--generations", type=int, help="generations for ES agents")
+    t.add_argument("--episodes", type=int, help="episodes for plain agents")
+    t.add_argument("--steps", type=int, help="environment-step budget (any agent)")
+    t.add_argument("--no-progress", action="store_true",
+                   help="accepted for parity with `esrl train`; progress is logged every 10 s")
+    t.add_argument(
+        "--address",
+        default="local",
+        help="Ray cluster: `local` starts one in this process (default), `auto` joins the "
+        "local `ray start` cluster, HOST:PORT or ray://HOST:PORT a remote one",
+    )
+    t.add_argument(
+        "--workers",
+        type=int,
+        help="local: CPUs of the cluster started [default: all cores]; otherwise the most "
+        "rollouts in flight [default: as many as the generation has]",
+    )
+    return p
+
+
+def _human(seconds: float) -> str:
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.1f} min"
+    return f"{seconds / 3600:.1f} h"
+
+
+def _bytes(n: float) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if n < 1024 or unit == "GiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n:.1f} GiB"
+
+
+def _start_ray(address: str, workers: Optional[int]) -> None:
+    import ray
+
+    if address == "local":
+        ray.init(
+            num_cpus=workers or os.cpu_count() or 1,
+            include_dashboard=False,
+            log_to_driver=True,
+            configure_logging=False,
+        )
+    else:
+        ray.init(address=address, log_to_driver=True, configure_logging=False)
+
+
+def train(argv: List[str]) -> int:
+    args = _parser().parse_args(argv)
+    if args.resume is not None:
+        clash = [f"--{n}" for n in ("out", "config", "preset", "seed", "env", "urdf")
+                 if getattr(args, n) is not None]
+        if clash:
+            print(f"error: --resume cannot be used with {', '.join(clash)} (the run's "
+                  "config.toml is used)", file=sys.stderr)
+            return 2
+    if args.workers is not None and args.workers < 1:
+        print("error: --workers must be at least 1", file=sys.stderr)
+        return 2
+    try:
+        import ray  # noqa: F401
+    except ImportError:
+        print('error: Ray is not installed: pip install "esrl_rs[ray]" (or pip install ray)',
+              file=sys.stderr)
+        return 1
+
+    from .. import _native
+    from . import RayEvaluator
+
+    plan = _native.plan_train(
+        args.agent, seed=args.seed, out=args.out, resume=args.resume, preset=args.preset,
+        config=args.config, env=args.env, urdf=args.urdf, threads=args.threads,
+        generations=args.generations, episodes=args.episodes, steps=args.steps,
+    )
+    for note in plan.notes:
+        print(note, file=sys.stderr)
+    if not plan.hybrid:
+        print(f"{plan.agent} has no population: it trains on the driver alone, as `esrl train` "
+              "would", file=sys.stderr)
+    _start_ray(args.address, args.workers)
+    import ray
+
+    evaluator = RayEvaluator(plan.config_toml, None if args.address == "local" else args.workers)
+    cpus = int(ray.cluster_resources().get("CPU", 0))
+    driver = _native.Driver(plan, evaluator)
+    opening = driver.opening
+    if opening["kind"] == "resumed":
+        print(f"resuming {plan.root} from {opening['checkpoint']} ({opening['rows']} rows, "
+              f"{opening['env_steps']} env steps)", file=sys.stderr)
+    unit = "generation" if plan.hybrid else "episode"
+    print(f"training {plan.agent} (seed {plan.seed}, {driver.total} {unit}s) into {plan.root}; "
+          f"rollouts on Ray at {args.address} ({cpus} CPUs), updates on the driver; Ctrl-C "
+          f"stops after the current {unit} with a checkpoint", file=sys.stderr, flush=True)
+
+    rows0, t0, last = driver.rows, time.perf_counter(), 0.0
+    finished = False
+    try:
+        while not driver.done():
+            row = driver.step()
+            now = time.perf_counter() - t0
+            if now - last > 10.0:
+                last = now
+                print(f"[{row['rows']}/{driver.total}] {row['summary']} | best so far "
+                      f"{row['best']:.1f} | {_human(driver.wall_s)}", file=sys.stderr,
+                      flush=True)
+        finished = True
+    except KeyboardInterrupt:
+        print(f"stopping after {driver.rows} rows", file=sys.stderr)
+    driver.finish(finished)
+    rows = driver.rows - rows0
+    traffic = driver.traffic
+    if plan.hybrid and rows > 0:
+        print(f"ray: {rows} {unit}s in {_human(time.perf_counter() - t0)}; per {unit}: "
+              f"{_bytes(traffic['bytes_out'] / rows)} of genomes out, "
+              f"{_bytes(traffic['bytes_in'] / rows)} of episodes back, "
+              f"{evaluator.wait_s / rows:.2f} s waiting on rollouts", file=sys.stderr)
+    if finished:
+        print(f"done: {driver.rows} rows, {driver.env_steps} env steps, "
+              f"{_human(driver.wall_s)} -> {plan.root}", file=sys.stderr)
+    else:
+        print(f"stopped after {driver.rows} rows; checkpoint written. Continue with: python -m "
+              f"esrl_rs.ray train {plan.agent} --resume {plan.root} (or esrl train)",
+              file=sys.stderr)
+    ray.shutdown()
+    return 0
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    return train(argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
