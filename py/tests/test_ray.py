@@ -105,3 +105,30 @@ def test_resume_refuses_new_run_options(tmp_path: Path) -> None:
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2
     assert "--seed" in proc.stderr
+
+
+def test_sigint_stops_after_the_generation_with_a_checkpoint(tmp_path: Path) -> None:
+    import json
+    import signal
+    import time
+
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "esrl_rs.ray", "train", *SMOKE, "--generations", "2000",
+           "--address", "local", "--workers", "1", "--out", str(out)]
+    proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.time() + 120
+        while time.time() < deadline:
+            csv_path = out / "metrics.csv"
+            if csv_path.is_file() and len(csv_path.read_text().splitlines()) >= 4:
+                break
+            time.sleep(0.1)
+        proc.send_signal(signal.SIGINT)
+        _, stderr = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, stderr[-2000:]
+    assert "stopped after" in stderr
+    state = json.loads((out / "checkpoint" / "state.json").read_text())
+    assert 3 <= state["rows"] < 2000
+    assert state["rows"] == len(rows(out))

@@ -10,9 +10,13 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
+import threading
 import time
-from typing import List, Optional
+from typing import Any, Callable, Dict, List, Optional, TypeVar
+
+T = TypeVar("T")
 
 AGENTS = ["es-sac", "es-td3", "es-ddpg", "sac", "td3", "ddpg"]
 PRESETS = ["paper", "quick", "long", "walking", "smoke"]
@@ -99,6 +103,47 @@ def _start_ray(address: str, workers: Optional[int]) -> None:
         ray.init(address=address, log_to_driver=True, configure_logging=False)
 
 
+class _StopSignals:
+    """Ctrl-C (SIGINT) and SIGTERM as `esrl train` treats them: the first finishes the row in
+    progress, writes a checkpoint and exits with 128 + the signal; a second exits at once."""
+
+    def __init__(self, unit: str) -> None:
+        self.requested = 0
+        self.unit = unit
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, self._on_signal)
+
+    def _on_signal(self, signum: int, _frame: object) -> None:
+        name = signal.Signals(signum).name
+        if self.requested:
+            print(f"{name} again: exiting now; the rows since the last checkpoint are lost",
+                  file=sys.stderr, flush=True)
+            os._exit(128 + signum)
+        self.requested = signum
+        print(f"{name}: stopping after the current {self.unit} with a checkpoint (send it "
+              "again to exit at once)", file=sys.stderr, flush=True)
+
+
+def _off_main_thread(call: Callable[[], T]) -> T:
+    """Runs `call` on another thread and waits, so that the main thread keeps handling
+    signals while the Rust core trains (it releases the interpreter)."""
+    box: Dict[str, Any] = {}
+
+    def run() -> None:
+        try:
+            box["value"] = call()
+        except BaseException as e:  # handed to the main thread
+            box["error"] = e
+
+    worker = threading.Thread(target=run, name="esrl-driver-step", daemon=True)
+    worker.start()
+    while worker.is_alive():
+        worker.join(0.2)
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
+
+
 def train(argv: List[str]) -> int:
     args = _parser().parse_args(argv)
     if args.resume is not None:
@@ -146,20 +191,16 @@ def train(argv: List[str]) -> int:
           f"rollouts on Ray at {args.address} ({cpus} CPUs), updates on the driver; Ctrl-C "
           f"stops after the current {unit} with a checkpoint", file=sys.stderr, flush=True)
 
+    stop = _StopSignals(unit)
     rows0, t0, last = driver.rows, time.perf_counter(), 0.0
-    finished = False
-    try:
-        while not driver.done():
-            row = driver.step()
-            now = time.perf_counter() - t0
-            if now - last > 10.0:
-                last = now
-                print(f"[{row['rows']}/{driver.total}] {row['summary']} | best so far "
-                      f"{row['best']:.1f} | {_human(driver.wall_s)}", file=sys.stderr,
-                      flush=True)
-        finished = True
-    except KeyboardInterrupt:
-        print(f"stopping after {driver.rows} rows", file=sys.stderr)
+    while not stop.requested and not driver.done():
+        row = _off_main_thread(driver.step)
+        now = time.perf_counter() - t0
+        if now - last > 10.0:
+            last = now
+            print(f"[{row['rows']}/{driver.total}] {row['summary']} | best so far "
+                  f"{row['best']:.1f} | {_human(driver.wall_s)}", file=sys.stderr, flush=True)
+    finished = driver.done()
     driver.finish(finished)
     rows = driver.rows - rows0
     traffic = driver.traffic
@@ -176,7 +217,7 @@ def train(argv: List[str]) -> int:
               f"esrl_rs.ray train {plan.agent} --resume {plan.root} (or esrl train)",
               file=sys.stderr)
     ray.shutdown()
-    return 0
+    return 0 if finished else 128 + stop.requested
 
 
 def main(argv: Optional[List[str]] = None) -> int:
