@@ -3,7 +3,9 @@
 //! with (sin 2πφ, cos 2πφ) of a phase that starts at a value drawn from the reset seed and
 //! advances by Ts/period per step; each step's `gait_clock` reward term is the contact reward
 //! of that phase and the feet's forces, and nothing on a fall; without a clock the
-//! environment is unchanged (43 observations, the same resets).
+//! environment is unchanged (43 observations, the same resets). The chatter term pays
+//! `−chatter` for each contact or air phase of a foot that ends shorter than `min_phase`,
+//! counted here from the feet's forces step by step.
 
 use esrl_sim::{Env, GaitClock, WalkConfig, WalkEnv};
 
@@ -14,6 +16,8 @@ fn stance_windows_and_contact_reward_by_hand() {
         duty: 0.6,
         reward: 0.5,
         contact_force: 10.0,
+        chatter: 0.0,
+        min_phase: 0.1,
     };
     // Left down for φ ∈ [0, 0.6); right down for (φ + 0.5) mod 1 ∈ [0, 0.6), i.e. φ ∈
     // [0, 0.1) ∪ [0.5, 1): double support on [0, 0.1) and [0.5, 0.6).
@@ -106,4 +110,62 @@ fn without_a_clock_nothing_changes() {
         assert_eq!(sa.obs[..], sb.obs[..43], "same dynamics");
         assert!(sa.info.reward_terms.iter().all(|t| t.0 != "gait_clock"));
     }
+}
+
+#[test]
+fn chatter_is_paid_for_each_short_phase_when_it_ends() {
+    let clock = GaitClock {
+        chatter: 0.7,
+        min_phase: 0.1,
+        ..GaitClock::default()
+    };
+    let cfg = WalkConfig {
+        gait_clock: Some(clock.clone()),
+        ..WalkConfig::default()
+    };
+    let min_steps = 4; // 0.1 s / 0.025 s
+    assert_eq!(clock.min_phase_steps(cfg.control_period), min_steps);
+    let mut env = WalkEnv::new(cfg).unwrap();
+    let (mut paid, mut transitions) = (0, 0);
+    for seed in 0..4u64 {
+        env.reset(seed);
+        // The phase in progress at reset has no known start: it is never short.
+        let mut down = env.foot_forces().map(|f| f > 10.0);
+        let mut length = [u32::MAX; 2];
+        for k in 0..200 {
+            // Legs kicked back and forth fast enough to lift and drop the feet.
+            let s = if (k / 3) % 2 == 0 { 1.0 } else { -1.0 };
+            let step = env.step(&[s, -s, s, -s, s, -s]);
+            let g = step.info.gait.as_ref().unwrap();
+            let mut short = 0;
+            for i in 0..2 {
+                let now = g.foot_force[i] > 10.0;
+                if now == down[i] {
+                    length[i] = length[i].saturating_add(1);
+                } else {
+                    transitions += 1;
+                    short += u32::from(length[i] < min_steps);
+                    down[i] = now;
+                    length[i] = 1;
+                }
+            }
+            let term = step
+                .info
+                .reward_terms
+                .iter()
+                .find(|t| t.0 == "chatter")
+                .unwrap()
+                .1;
+            let expect = if g.fell { 0.0 } else { -0.7 * short as f32 };
+            assert_eq!(term, expect, "seed {seed}, step {k}");
+            paid += usize::from(term != 0.0);
+            if step.terminated || step.truncated {
+                break;
+            }
+        }
+    }
+    assert!(
+        transitions > 0 && paid > 0,
+        "{transitions} transitions, {paid} paid"
+    );
 }

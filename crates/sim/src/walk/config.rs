@@ -222,6 +222,14 @@ pub struct GaitClock {
     /// Normal force above which a foot counts as down, N. Default 10 (the gait metrics'
     /// threshold, `esrl_metrics::GaitThresholds`).
     pub contact_force: f32,
+    /// Penalty for each contact or air phase of a foot that ends shorter than `min_phase`:
+    /// foot chatter, a foot lifting off for a control step inside its stance or tapping the
+    /// ground inside its swing, which the gait metrics count as extra steps. Paid at the
+    /// step that ends the phase, as the term `chatter`. Default 0 (off).
+    pub chatter: f32,
+    /// The shortest contact or air phase that is not chatter, s. Default 0.1 (4 control
+    /// steps of 25 ms; the default clock's swing lasts 0.4 s).
+    pub min_phase: f32,
 }
 
 impl Default for GaitClock {
@@ -231,6 +239,8 @@ impl Default for GaitClock {
             duty: 0.6,
             reward: 0.5,
             contact_force: 10.0,
+            chatter: 0.0,
+            min_phase: 0.1,
         }
     }
 }
@@ -240,6 +250,12 @@ impl GaitClock {
     pub fn stance(&self, phi: f32) -> [bool; 2] {
         let right = (phi + 0.5).rem_euclid(1.0);
         [phi.rem_euclid(1.0) < self.duty, right < self.duty]
+    }
+
+    /// The control steps below which a contact or air phase is chatter, for control period
+    /// `dt`: `min_phase / dt`, rounded.
+    pub fn min_phase_steps(&self, dt: f32) -> u32 {
+        (self.min_phase / dt).round() as u32
     }
 
     /// The clock's reward for the feet's normal forces at phase `phi`.
@@ -446,6 +462,8 @@ impl WalkConfig {
             }
             fin("gait_clock.reward", c.reward)?;
             nonneg("gait_clock.contact_force", c.contact_force)?;
+            nonneg("gait_clock.chatter", c.chatter)?;
+            nonneg("gait_clock.min_phase", c.min_phase)?;
         }
         nonneg("init_noise.joint_angle", self.init_noise.joint_angle)?;
         nonneg("init_noise.joint_velocity", self.init_noise.joint_velocity)?;

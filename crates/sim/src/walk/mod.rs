@@ -170,6 +170,8 @@ pub struct WalkEnv {
     last_abs_power: Vec<f32>,
     /// Gait-clock phase at reset, drawn from the reset seed (0 without a clock).
     phase0: f32,
+    /// Each foot's contact phase, for the gait clock's chatter term.
+    feet: reward::FootPhases,
 }
 
 impl WalkEnv {
@@ -213,6 +215,7 @@ impl WalkEnv {
             last_power: vec![0.0; n_a],
             last_abs_power: vec![0.0; n_a],
             phase0: 0.0,
+            feet: reward::FootPhases::reset([false; 2]),
         }
     }
 
@@ -320,6 +323,19 @@ impl WalkEnv {
     /// Steps taken since the last reset.
     pub fn steps(&self) -> usize {
         self.steps
+    }
+
+    /// The ground's normal force on each foot now (left, right), N.
+    pub fn foot_forces(&self) -> [f32; 2] {
+        self.shared.feet.map(|f| self.sim.ground_normal_force(f))
+    }
+
+    /// Whether each foot is down now by the gait clock's contact force (no clock: neither).
+    fn feet_down(&self, s: &WalkShared) -> [bool; 2] {
+        match &s.config.gait_clock {
+            Some(c) => self.foot_forces().map(|n| n > c.contact_force),
+            None => [false; 2],
+        }
     }
 
     /// The gait-clock phase φ ∈ [0, 1) now ([`GaitClock`]; 0 without a clock).
@@ -449,6 +465,7 @@ impl Env for WalkEnv {
         self.last_torque.fill(0.0);
         self.last_power.fill(0.0);
         self.last_abs_power.fill(0.0);
+        self.feet = reward::FootPhases::reset(self.feet_down(&s));
         self.observation()
     }
 
@@ -474,9 +491,19 @@ impl Env for WalkEnv {
             abs_power: &self.last_abs_power,
             limit: &s.effort,
         };
+        let force = self.foot_forces();
+        let short_phases = match &s.config.gait_clock {
+            Some(c) => {
+                let down = force.map(|n| n > c.contact_force);
+                let min_steps = c.min_phase_steps(s.config.control_period);
+                self.feet.advance(down, min_steps)
+            }
+            None => 0,
+        };
         let feet = reward::Feet {
-            force: s.feet.map(|f| self.sim.ground_normal_force(f)),
+            force,
             phase: self.phase(),
+            short_phases,
         };
         let finite = obs.iter().all(|v| v.is_finite());
         let outcome = reward::judge(&s.config, &torso, finite, &effort, &feet);

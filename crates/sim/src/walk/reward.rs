@@ -25,11 +25,47 @@ pub(super) struct Effort<'a> {
     pub(super) limit: &'a [f32],
 }
 
-/// The feet after a step: their ground normal forces (N, left and right) and the gait
-/// clock's phase (when the config has a clock).
+/// The feet after a step: their ground normal forces (N, left and right), the gait
+/// clock's phase (when the config has a clock) and how many contact or air phases this step
+/// ended shorter than the clock's `min_phase` (chatter).
 pub(super) struct Feet {
     pub(super) force: [f32; 2],
     pub(super) phase: f32,
+    pub(super) short_phases: u32,
+}
+
+/// Each foot's contact state and the control steps it has lasted, for the chatter term.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct FootPhases {
+    down: [bool; 2],
+    steps: [u32; 2],
+}
+
+impl FootPhases {
+    /// At reset, with the feet `down` or not: the phases in progress count as long (their
+    /// start is not known).
+    pub(super) fn reset(down: [bool; 2]) -> Self {
+        Self {
+            down,
+            steps: [u32::MAX; 2],
+        }
+    }
+
+    /// Advances one control step to the feet `down` now; returns how many phases (contact
+    /// or air) this step ended after fewer than `min_steps` steps.
+    pub(super) fn advance(&mut self, down: [bool; 2], min_steps: u32) -> u32 {
+        let mut short = 0;
+        for (i, &now) in down.iter().enumerate() {
+            if now == self.down[i] {
+                self.steps[i] = self.steps[i].saturating_add(1);
+            } else {
+                short += u32::from(self.steps[i] < min_steps);
+                self.down[i] = now;
+                self.steps[i] = 1;
+            }
+        }
+        short
+    }
 }
 
 /// The verdict on one step.
@@ -88,6 +124,14 @@ pub(super) fn judge(
             clock.contact_reward(feet.phase, feet.force)
         };
         terms.push(("gait_clock", r));
+        if clock.chatter != 0.0 {
+            let c = if fell || off_course {
+                0.0
+            } else {
+                -clock.chatter * feet.short_phases as f32
+            };
+            terms.push(("chatter", c));
+        }
     }
     if w.torque_sq != 0.0 {
         let t2: f32 = e
@@ -126,5 +170,40 @@ fn torso_yaw(rotation: Rotation) -> f32 {
         0.0
     } else {
         x.y.atan2(x.x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::FootPhases;
+
+    /// Counts by hand: the left foot lifts off for 1 step inside a stance (short air phase),
+    /// then stands 4 steps (not short at 4), swings 5 and lands; the right foot taps the
+    /// ground for 2 steps inside a swing (short contact), and its air phases around it
+    /// are long or unknown.
+    #[test]
+    fn short_phases_are_counted_when_they_end() {
+        let left = "TTTFTTTTFFFFFT";
+        let right = "FFFFFTTFFFFFFF";
+        let mut phases = FootPhases::reset([true, false]);
+        let per_step: Vec<u32> = left
+            .chars()
+            .zip(right.chars())
+            .map(|(l, r)| phases.advance([l == 'T', r == 'T'], 4))
+            .collect();
+        //                 T  T  T  F  T  T  T  T  F  F  F  F  F  T   (left)
+        //                 F  F  F  F  F  T  T  F  F  F  F  F  F  F   (right)
+        let expected = [0, 0, 0, 0, 1, 0, 0, 1, 0, 0, 0, 0, 0, 0];
+        assert_eq!(per_step, expected);
+    }
+
+    #[test]
+    fn the_phase_in_progress_at_reset_is_never_short() {
+        let mut phases = FootPhases::reset([true, true]);
+        assert_eq!(phases.advance([false, false], 4), 0);
+        // One step in the air, then down: that air phase was short.
+        assert_eq!(phases.advance([true, true], 4), 2);
+        // Off at 0 steps' threshold: nothing is short.
+        assert_eq!(phases.advance([false, true], 0), 0);
     }
 }
