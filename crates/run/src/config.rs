@@ -349,6 +349,23 @@ impl TrainConfig {
         self.walk.gait_clock = Some(esrl_sim::GaitClock::default());
     }
 
+    /// Applies the flags a resumed run may change too: `--generations`, `--episodes`,
+    /// `--steps` and `--threads`.
+    pub fn apply_budget(&mut self, opts: &Overrides) {
+        if let Some(t) = opts.threads {
+            self.threads = t;
+        }
+        if let Some(g) = opts.generations {
+            self.generations = g;
+        }
+        if let Some(e) = opts.episodes {
+            self.episodes = e;
+        }
+        if let Some(s) = opts.steps {
+            self.max_env_steps = Some(s);
+        }
+    }
+
     /// Resolves preset, file and flags, in that order, and validates the result.
     pub fn resolve(agent: AgentKind, opts: &Overrides, seed: Option<u64>) -> Result<Self> {
         let env = opts.env.unwrap_or(EnvKind::Walk);
@@ -363,18 +380,7 @@ impl TrainConfig {
         if let Some(s) = seed {
             cfg.seed = s;
         }
-        if let Some(t) = opts.threads {
-            cfg.threads = t;
-        }
-        if let Some(g) = opts.generations {
-            cfg.generations = g;
-        }
-        if let Some(e) = opts.episodes {
-            cfg.episodes = e;
-        }
-        if let Some(s) = opts.steps {
-            cfg.max_env_steps = Some(s);
-        }
+        cfg.apply_budget(opts);
         if let Some(u) = &opts.urdf {
             cfg.walk.urdf = Some(u.clone());
         }

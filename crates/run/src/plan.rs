@@ -97,19 +97,7 @@ pub fn plan(req: &TrainRequest) -> Result<TrainPlan> {
         ));
     }
     let stored = TrainConfig::load(&path)?;
-    let o = &req.overrides;
-    if let Some(g) = o.generations {
-        cfg.generations = g;
-    }
-    if let Some(e) = o.episodes {
-        cfg.episodes = e;
-    }
-    if let Some(s) = o.steps {
-        cfg.max_env_steps = Some(s);
-    }
-    if let Some(t) = o.threads {
-        cfg.threads = t;
-    }
+    cfg.apply_budget(&req.overrides);
     cfg.validate()?;
     if cfg != stored {
         write_atomic(&path, cfg.to_toml()?.as_bytes())?;

@@ -83,7 +83,6 @@ class RayEvaluator:
         self._task = ray.remote(num_cpus=1, max_retries=MAX_RETRIES)(rollout)
         self.workers = workers
         self.wait_s = 0.0
-        self.calls = 0
 
     def __call__(self, genomes: List[bytes]) -> List[bytes]:
         ray = self._ray
@@ -100,5 +99,4 @@ class RayEvaluator:
             in_flight.append(ref)
         out = ray.get(refs)
         self.wait_s += time.perf_counter() - started
-        self.calls += 1
         return out
