@@ -72,6 +72,14 @@ pub struct RlConfig {
     /// Global gradient-norm clip. Default 10 (esrl's choice: MATLAB's default is ∞, the paper
     /// uses a threshold without giving it).
     pub grad_clip: f64,
+    /// Clips the TD target y of eq. 3 to the discounted returns the stored rewards allow:
+    /// [(min(r_lo, 0) − e)/(1 − γ), (max(r_hi, 0) + e)/(1 − γ)], r_lo and r_hi the smallest
+    /// and largest reward in the replay buffer, e = α·|A|·ln 2 for SAC (the largest mean
+    /// entropy bonus a tanh-squashed policy earns per step) and 0 for TD3/DDPG. A guard
+    /// against a critic that runs away from every reachable value; the upper bound is exact,
+    /// the lower one is for SAC a floor that policies keeping their entropy above −|A|·ln 2
+    /// never reach. Default false (the paper bootstraps unclipped).
+    pub clip_targets: bool,
     /// L2 regularisation factor. Default 1e-4 (MATLAB `L2RegularizationFactor`).
     pub l2: f64,
     /// Initial entropy weight α (SAC). Default 1.0 (MATLAB `EntropyWeight`, CleanRL).
@@ -112,6 +120,7 @@ impl Default for RlConfig {
             critic_lr: 3e-4,
             alpha_lr: 3e-4,
             grad_clip: 10.0,
+            clip_targets: false,
             l2: 1e-4,
             initial_alpha: 1.0,
             target_entropy: None,

@@ -67,6 +67,9 @@ pub struct SequenceBatch {
     pub mask: Vec<f32>,
     /// True where the recurrent state must be zeroed before the step; `(W, B)`.
     pub reset: Vec<bool>,
+    /// The smallest and largest reward stored in the buffer when the batch was drawn
+    /// ((0, 0) for an empty buffer): the bounds of `rl.clip_targets`.
+    pub reward_range: (f32, f32),
 }
 
 impl SequenceBatch {
@@ -105,6 +108,10 @@ pub struct ReplayBuffer {
     terminated: Vec<bool>,
     episode: Vec<u64>,
     step: Vec<u32>,
+    /// The smallest and largest stored reward ((0, 0) while empty), kept up to date by
+    /// [`ReplayBuffer::push`] (rescanned only when an extreme is overwritten).
+    #[serde(skip)]
+    reward_range: (f32, f32),
 }
 
 impl ReplayBuffer {
@@ -126,7 +133,24 @@ impl ReplayBuffer {
             terminated: vec![false; capacity],
             episode: vec![0; capacity],
             step: vec![0; capacity],
+            reward_range: (0.0, 0.0),
         }
+    }
+
+    /// The smallest and largest reward stored, `None` while the buffer is empty.
+    pub fn reward_range(&self) -> Option<(f32, f32)> {
+        (self.len > 0).then_some(self.reward_range)
+    }
+
+    /// Rescans the stored rewards for their range.
+    fn rescan_reward_range(&mut self) {
+        let stored = &self.reward[..self.len];
+        self.reward_range = match stored.first() {
+            None => (0.0, 0.0),
+            Some(&r0) => stored
+                .iter()
+                .fold((r0, r0), |(lo, hi), &r| (lo.min(r), hi.max(r))),
+        };
     }
 
     /// Transitions stored.
@@ -180,6 +204,7 @@ impl ReplayBuffer {
             0
         };
         let i = self.head;
+        let overwritten = (self.len == self.capacity).then(|| self.reward[i]);
         let (o, a) = (self.obs_dim, self.act_dim);
         self.obs[i * o..(i + 1) * o].copy_from_slice(t.obs);
         self.next_obs[i * o..(i + 1) * o].copy_from_slice(t.next_obs);
@@ -192,6 +217,12 @@ impl ReplayBuffer {
         self.head = (self.head + 1) % self.capacity;
         self.len = (self.len + 1).min(self.capacity);
         self.pushed += 1;
+        let (lo, hi) = self.reward_range;
+        match overwritten {
+            Some(old) if old <= lo || old >= hi => self.rescan_reward_range(),
+            _ if self.len == 1 => self.reward_range = (t.reward, t.reward),
+            _ => self.reward_range = (lo.min(t.reward), hi.max(t.reward)),
+        }
     }
 
     /// Slot of the oldest stored transition.
@@ -236,6 +267,7 @@ impl ReplayBuffer {
             terminated: vec![0.0; batch * window],
             mask: vec![0.0; batch * window],
             reset: vec![false; batch * window],
+            reward_range: self.reward_range,
         };
         if self.is_empty() || window == 0 {
             out.batch = 0;
@@ -452,6 +484,7 @@ impl ReplayBuffer {
         buf.next_episode = id;
         buf.episode_open = episode_open && n > 0;
         buf.pushed = pushed;
+        buf.rescan_reward_range();
         buf
     }
 
@@ -695,5 +728,36 @@ mod tests {
         let a = buf.sample_sequences(&mut ChaCha8Rng::seed_from_u64(5), 16, 4, 4);
         let b = buf.sample_sequences(&mut ChaCha8Rng::seed_from_u64(5), 16, 4, 4);
         assert_eq!(a, b);
+    }
+
+    #[test]
+    fn reward_range_follows_the_stored_rewards() {
+        // Few distinct values, so extremes repeat and are overwritten while a copy remains.
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let mut buf = ReplayBuffer::new(1, 1, 7);
+        let mut pushed: Vec<f32> = Vec::new();
+        assert_eq!(buf.reward_range(), None);
+        for k in 0..300 {
+            let reward = f32::from(rng.random_range(-3i8..=3)) * 0.5;
+            buf.push(Transition {
+                obs: &[k as f32],
+                action: &[0.0],
+                reward,
+                next_obs: &[k as f32],
+                terminated: false,
+            });
+            pushed.push(reward);
+            let stored = &pushed[pushed.len().saturating_sub(7)..];
+            let lo = stored.iter().copied().fold(f32::INFINITY, f32::min);
+            let hi = stored.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            assert_eq!(buf.reward_range(), Some((lo, hi)), "after push {k}");
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("b.safetensors");
+        buf.save(&path).unwrap();
+        let back = ReplayBuffer::load(&path, 1, 1, 7, false).unwrap();
+        assert_eq!(back.reward_range(), buf.reward_range());
+        let batch = back.sample_transitions(&mut rng, 4);
+        assert_eq!(Some(batch.reward_range), buf.reward_range());
     }
 }

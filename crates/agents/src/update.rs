@@ -40,6 +40,19 @@ struct Trained {
     norm: f32,
     /// α at the start of the update (0 without the entropy term).
     alpha: f32,
+    /// The buffer's reward range when the batch was drawn.
+    reward_range: (f32, f32),
+}
+
+/// The interval `rl.clip_targets` clips the TD target to: the discounted returns of rewards in
+/// `range` (widened to include 0, for episodes that end), plus or minus an entropy bonus
+/// `bonus` per step (0 without the entropy term).
+pub(crate) fn target_bounds(range: (f32, f32), gamma: f32, bonus: f32) -> (f32, f32) {
+    let horizon = 1.0 / (1.0 - gamma);
+    (
+        (range.0.min(0.0) - bonus) * horizon,
+        (range.1.max(0.0) + bonus) * horizon,
+    )
 }
 
 /// Recurrent states after burn-in (`None` entries for feed-forward networks).
@@ -121,6 +134,7 @@ impl Agent {
             mask: steps(&batch.mask, b, 1, burn, w),
             norm: 1.0 / n_masked.max(1.0),
             alpha: self.alpha() as f32,
+            reward_range: batch.reward_range,
         }
     }
 
@@ -173,11 +187,17 @@ impl Agent {
             .reduce(|m, q| m.iter().zip(&q).map(|(x, y)| x.min(*y)).collect())
             .unwrap_or_default();
         let gamma = self.cfg.gamma as f32;
+        let (lo, hi) = if self.cfg.clip_targets {
+            let bonus = p.alpha * self.act_dim as f32 * std::f32::consts::LN_2;
+            target_bounds(p.reward_range, gamma, bonus)
+        } else {
+            (f32::NEG_INFINITY, f32::INFINITY)
+        };
         let (r, nd) = (p.reward.data(), p.not_done.data());
         let y = (0..qmin.len())
             .map(|i| {
                 let soft = qmin[i] + entropy.as_ref().map_or(0.0, |e| e[i]);
-                r[i] + gamma * nd[i] * soft
+                (r[i] + gamma * nd[i] * soft).clamp(lo, hi)
             })
             .collect();
         Tensor::from_vec(qmin.len(), 1, y)
@@ -528,5 +548,29 @@ impl Agent {
             critics,
             critic_targets,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::target_bounds;
+
+    #[test]
+    fn target_bounds_by_hand() {
+        // γ = 0.9: a horizon of 10 steps.
+        let (lo, hi) = target_bounds((-2.0, 3.0), 0.9, 0.0);
+        assert!(
+            (lo + 20.0).abs() < 1e-4 && (hi - 30.0).abs() < 1e-4,
+            "{lo} {hi}"
+        );
+        // Rewards all positive: an episode that ends at once returns 0, so 0 stays inside.
+        let (lo, hi) = target_bounds((1.0, 2.0), 0.9, 0.0);
+        assert!(lo.abs() < 1e-4 && (hi - 20.0).abs() < 1e-4, "{lo} {hi}");
+        // An entropy bonus of 0.5 per step widens both sides by 5.
+        let (lo, hi) = target_bounds((-1.0, -0.5), 0.9, 0.5);
+        assert!(
+            (lo + 15.0).abs() < 1e-4 && (hi - 5.0).abs() < 1e-4,
+            "{lo} {hi}"
+        );
     }
 }
