@@ -322,6 +322,47 @@ fn passing_the_end_of_the_track_is_a_success() {
 }
 
 #[test]
+fn with_end_at_finish_off_the_episode_runs_past_the_line() {
+    // The forward tip of the test above, with the line at 0.03 m not ending the episode.
+    let config = WalkConfig {
+        track_length: 0.03,
+        end_at_finish: false,
+        ..WalkConfig::default()
+    };
+    let mut env = WalkEnv::new(config).unwrap();
+    env.reset(0);
+    let stand = env.standing_pose();
+    for (k, n) in env.actuated_joint_names().to_vec().iter().enumerate() {
+        if !n.ends_with("ankle") {
+            let j = env.model().joint_index(n).unwrap();
+            env.sim_mut().set_joint_servo(j, stand[k], 2000.0, 100.0);
+        }
+    }
+    let mut crossed = None;
+    for k in 0..80 {
+        let s = env.step(&[0.0, 0.0, -0.6, 0.0, 0.0, -0.6]);
+        let g = gait(&s);
+        assert_eq!(
+            g.success,
+            g.torso_position[0] >= 0.03 && !g.fell,
+            "step {k}"
+        );
+        if g.success {
+            assert!(!s.terminated, "success ended the episode at step {k}");
+            crossed.get_or_insert(k);
+        }
+        if s.terminated {
+            break;
+        }
+    }
+    let k = crossed.expect("never reached x = 0.03 m");
+    assert!(
+        k < 79,
+        "crossed on the last step: nothing after it was checked"
+    );
+}
+
+#[test]
 fn bad_configs_name_the_field() {
     let cases: Vec<(WalkConfig, &str)> = vec![
         (

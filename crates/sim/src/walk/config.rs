@@ -304,9 +304,16 @@ pub struct WalkConfig {
     pub control_period: f32,
     /// Episode length Tf, s; truncation after `Tf / Ts` steps. Default 60 (paper §5).
     pub episode_seconds: f32,
-    /// Track length, m: success (termination) when the torso passes `x = track_length`.
-    /// Default 50 (paper Fig. 4).
+    /// Track length, m: success when the torso passes `x = track_length`. Default 50 (paper
+    /// Fig. 4).
     pub track_length: f32,
+    /// Whether success ends the episode (terminal, no bootstrapping). Default true. With
+    /// `false` the robot walks on past the line until the episode's time is up (the track
+    /// time is still taken where it crosses): over a track that ends the episode the forward
+    /// term sums to the same (length / control period) at any speed while the per-step terms
+    /// (alive, gait clock) pay for time spent, so the most rewarding policy reaches the line
+    /// just as the episode ends; on a track that goes on, speed pays.
+    pub end_at_finish: bool,
     /// Physics settings (step, solver, contact).
     pub physics: PhysicsConfig,
     /// Reward coefficients (paper eq. 12).
@@ -357,6 +364,7 @@ impl Default for WalkConfig {
             control_period: 0.025,
             episode_seconds: 60.0,
             track_length: 50.0,
+            end_at_finish: true,
             physics: PhysicsConfig::default(),
             reward: RewardConfig::default(),
             fall: FallConfig::default(),

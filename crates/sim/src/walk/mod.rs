@@ -115,7 +115,9 @@
 //! set: torso origin more than [`FallConfig::max_lateral`] from the centre line, or its heading
 //! (the angle of its x axis on the ground from world x) more than [`FallConfig::max_yaw`] from
 //! the track direction (both off by default, as in the paper). Terminated with success when
-//! the torso origin passes `x = track_length`.
+//! the torso origin passes `x = track_length`, unless `end_at_finish = false`: then every
+//! step past the line reports success (the first one times the track) and the episode
+//! runs on to its truncation.
 //!
 //! # Reset
 //!
@@ -507,7 +509,8 @@ impl Env for WalkEnv {
         };
         let finite = obs.iter().all(|v| v.is_finite());
         let outcome = reward::judge(&s.config, &torso, finite, &effort, &feet);
-        let terminated = outcome.fell || outcome.off_course || outcome.success;
+        let terminated =
+            outcome.fell || outcome.off_course || (outcome.success && s.config.end_at_finish);
         let truncated = !terminated && self.steps >= s.max_steps;
         let gait = GaitSample {
             time: self.steps as f32 * s.config.control_period,
