@@ -77,6 +77,6 @@ fn main() -> Result<()> {
         }
     }
     quantiles("reward", batch.reward.clone());
-    println!("alpha {:.4}, updates {}", agent.alpha(), agent.updates());
+    println!("alpha {:.4}", agent.alpha());
     Ok(())
 }
