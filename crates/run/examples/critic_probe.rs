@@ -1,6 +1,7 @@
 //! Looks inside a run's agent: the actor's pre-squash mean, standard deviation and sampled
 //! log π, and each critic's Q on the replay buffer's transitions and on the actor's own
-//! actions, as quantiles over 512 windows of 16 steps drawn from `RUN/replay/`.
+//! actions, as quantiles over 512 windows of 16 steps drawn from the replay buffer of
+//! `RUN/checkpoint`.
 //!
 //! ```sh
 //! cargo run --release -p esrl-run --example critic_probe -- RUN [CHECKPOINT_DIR]
@@ -10,7 +11,6 @@
 //! (against the replay buffer of the run's last checkpoint). Windows run from a zero
 //! recurrent state and ignore episode starts inside them: a diagnostic, not the update.
 
-use esrl_agents::ReplayBuffer;
 use esrl_nn::{Graph, Tensor};
 use rand::SeedableRng;
 use std::path::{Path, PathBuf};
@@ -43,13 +43,8 @@ fn main() -> Result<()> {
     let envs = esrl_run::build::envs(cfg.env, &cfg.walk)?;
     let mut agent = esrl_run::build::agent(&cfg, &envs)?;
     esrl_run::checkpoint::load_agent(&ckpt, &mut agent)?;
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(run.join("replay"))?
-        .map(|e| e.map(|e| e.path()))
-        .collect::<std::result::Result<_, _>>()?;
-    paths.sort();
-    let refs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
+    let buf = esrl_run::checkpoint::replay_buffer(&run.join("checkpoint"), &agent)?;
     let (o, a) = (agent.obs_dim(), agent.act_dim());
-    let buf = ReplayBuffer::load_chunks(&refs, o, a, agent.config().buffer_size, false, 0)?;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
     let b = 512;
     let batch = buf.sample_sequences(&mut rng, b, 8, 8);

@@ -543,6 +543,14 @@ pub fn load_agent(dir: &Path, agent: &mut Agent) -> Result<()> {
     })
 }
 
+/// The replay buffer a checkpoint folder names, for looking inside a run
+/// (`examples/critic_probe.rs`): read and checked as on resume, with the episode in progress
+/// at the checkpoint counted as ended.
+pub fn replay_buffer(dir: &Path, agent: &Agent) -> Result<ReplayBuffer> {
+    let state = read_run_state(dir)?;
+    read_buffer(dir, &state, agent, false)
+}
+
 /// The replay buffer of a checkpoint: its chunks in `RUN/replay/`, each checked against its
 /// hash (or the `replay.safetensors` of checkpoints before chunks).
 fn read_buffer(

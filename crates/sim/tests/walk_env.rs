@@ -293,15 +293,11 @@ fn the_episode_truncates_at_its_time_limit() {
     }
 }
 
-#[test]
-fn passing_the_end_of_the_track_is_a_success() {
-    let config = WalkConfig {
-        track_length: 0.03,
-        ..WalkConfig::default()
-    };
+/// An env reset with seed 0 whose hips and knees are held stiff at standing, so that
+/// dorsiflexing both ankles (action `[0, 0, −0.6, 0, 0, −0.6]`) tips the body forward.
+fn tipping_forward(config: WalkConfig) -> WalkEnv {
     let mut env = WalkEnv::new(config).unwrap();
     env.reset(0);
-    // Hips and knees held stiff; dorsiflexing both ankles tips the body forward.
     let stand = env.standing_pose();
     for (k, n) in env.actuated_joint_names().to_vec().iter().enumerate() {
         if !n.ends_with("ankle") {
@@ -309,6 +305,16 @@ fn passing_the_end_of_the_track_is_a_success() {
             env.sim_mut().set_joint_servo(j, stand[k], 2000.0, 100.0);
         }
     }
+    env
+}
+
+#[test]
+fn passing_the_end_of_the_track_is_a_success() {
+    let config = WalkConfig {
+        track_length: 0.03,
+        ..WalkConfig::default()
+    };
+    let mut env = tipping_forward(config);
     for _ in 0..80 {
         let s = env.step(&[0.0, 0.0, -0.6, 0.0, 0.0, -0.6]);
         if s.terminated {
@@ -329,15 +335,7 @@ fn with_end_at_finish_off_the_episode_runs_past_the_line() {
         end_at_finish: false,
         ..WalkConfig::default()
     };
-    let mut env = WalkEnv::new(config).unwrap();
-    env.reset(0);
-    let stand = env.standing_pose();
-    for (k, n) in env.actuated_joint_names().to_vec().iter().enumerate() {
-        if !n.ends_with("ankle") {
-            let j = env.model().joint_index(n).unwrap();
-            env.sim_mut().set_joint_servo(j, stand[k], 2000.0, 100.0);
-        }
-    }
+    let mut env = tipping_forward(config);
     let mut crossed = None;
     for k in 0..80 {
         let s = env.step(&[0.0, 0.0, -0.6, 0.0, 0.0, -0.6]);
