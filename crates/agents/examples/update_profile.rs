@@ -11,7 +11,7 @@ fn main() {
         _ => NetConfig::default(),
     };
     let iters: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(50);
-    match bench::time_update(Algo::Sac, &nets, 31, 6, iters, 1) {
+    match bench::time_update(Algo::Sac, &nets, 31, 6, iters, 1, 1) {
         Ok(t) => println!(
             "{:.3} ms/update median, {:.3} min, over {} updates",
             t.ms_per_update, t.min_ms, t.reps

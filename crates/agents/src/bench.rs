@@ -4,10 +4,10 @@
 //! burn-in for recurrent networks, 256 transitions for feed-forward ones. Single thread;
 //! batch sampling is not timed.
 
-use crate::agent::{Agent, AgentError};
+use crate::agent::{Agent, AgentError, UpdateStats};
 use crate::config::{Algo, RlConfig};
 use crate::nets::NetConfig;
-use crate::replay::{ReplayBuffer, Transition};
+use crate::replay::{ReplayBuffer, SequenceBatch, Transition};
 use esrl_nn::Module;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -35,7 +35,8 @@ pub struct UpdateTiming {
 }
 
 /// Times `reps` updates of an `algo` agent with networks `nets` for observations of
-/// `obs_dim` and actions of `act_dim`, after `warmup` untimed ones.
+/// `obs_dim` and actions of `act_dim`, after `warmup` untimed ones, its batch split into
+/// `batch_chunks` chunks (`rl.batch_chunks`).
 pub fn time_update(
     algo: Algo,
     nets: &NetConfig,
@@ -43,8 +44,9 @@ pub fn time_update(
     act_dim: usize,
     reps: usize,
     warmup: usize,
+    batch_chunks: usize,
 ) -> Result<UpdateTiming, AgentError> {
-    let mut run = RandomData::new(algo, nets, obs_dim, act_dim, 256)?;
+    let mut run = RandomData::new(algo, nets, obs_dim, act_dim, 256, 0, batch_chunks)?;
     for _ in 0..warmup {
         run.update()?;
     }
@@ -64,22 +66,27 @@ pub fn time_update(
 }
 
 /// `updates` updates of a fresh `algo` agent (seed 0) with networks `nets`, on batches of
-/// `batch` sequences × 8 steps (recurrent) or `batch` transitions drawn from random data:
-/// the agent afterwards. The same arguments give the same agent, bit for bit, on a rayon
-/// pool of any size (`tests/threaded_update.rs`).
+/// `batch` sequences × 8 steps after 4 steps of burn-in (recurrent) or `batch` transitions
+/// drawn from random data, split into `batch_chunks` chunks: the agent afterwards and each
+/// update's statistics. The
+/// same arguments give the same agent, bit for bit, on a rayon pool of any size
+/// (`tests/threaded_update.rs`).
 pub fn train_on_random_data(
     algo: Algo,
     nets: &NetConfig,
     obs_dim: usize,
     act_dim: usize,
     batch: usize,
+    batch_chunks: usize,
     updates: usize,
-) -> Result<Agent, AgentError> {
-    let mut run = RandomData::new(algo, nets, obs_dim, act_dim, batch)?;
+) -> Result<(Agent, Vec<UpdateStats>), AgentError> {
+    let mut run = RandomData::new(algo, nets, obs_dim, act_dim, batch, 4, batch_chunks)?;
+    let mut stats = Vec::with_capacity(updates);
     for _ in 0..updates {
-        run.update()?;
+        let b = run.batch();
+        stats.push(run.agent.update(&b)?);
     }
-    Ok(run.agent)
+    Ok((run.agent, stats))
 }
 
 /// An agent updating on batches drawn from a buffer of random data.
@@ -89,6 +96,7 @@ struct RandomData {
     rng: ChaCha8Rng,
     batch: usize,
     seq_len: usize,
+    burn_in: usize,
     recurrent: bool,
 }
 
@@ -99,11 +107,14 @@ impl RandomData {
         obs_dim: usize,
         act_dim: usize,
         batch: usize,
+        burn_in: usize,
+        batch_chunks: usize,
     ) -> Result<Self, AgentError> {
         let cfg = RlConfig {
-            burn_in: 0,
+            burn_in,
             seq_len: 8,
             batch_size: batch,
+            batch_chunks,
             ..RlConfig::for_algo(algo)
         };
         Ok(Self {
@@ -112,18 +123,24 @@ impl RandomData {
             rng: ChaCha8Rng::seed_from_u64(0),
             batch,
             seq_len: cfg.seq_len,
+            burn_in,
             recurrent: nets.recurrent(),
         })
     }
 
-    /// One update on a fresh batch; returns its seconds (batch sampling not timed).
-    fn update(&mut self) -> Result<f64, AgentError> {
-        let b = if self.recurrent {
+    /// The next batch.
+    fn batch(&mut self) -> SequenceBatch {
+        if self.recurrent {
             self.buffer
-                .sample_sequences(&mut self.rng, self.batch, self.seq_len, 0)
+                .sample_sequences(&mut self.rng, self.batch, self.seq_len, self.burn_in)
         } else {
             self.buffer.sample_transitions(&mut self.rng, self.batch)
-        };
+        }
+    }
+
+    /// One update on a fresh batch; returns its seconds (batch sampling not timed).
+    fn update(&mut self) -> Result<f64, AgentError> {
+        let b = self.batch();
         let t = Instant::now();
         self.agent.update(&b)?;
         Ok(t.elapsed().as_secs_f64())

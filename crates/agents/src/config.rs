@@ -80,6 +80,15 @@ pub struct RlConfig {
     /// the lower one is for SAC a floor that policies keeping their entropy above −|A|·ln 2
     /// never reach. Default false (the paper bootstraps unclipped).
     pub clip_targets: bool,
+    /// Splits each update's batch into this many fixed chunks of consecutive sequences (or
+    /// transitions) that run the critic and actor losses forward and backward side by side
+    /// on the rayon pool, their gradients summed in chunk order. The split depends on this
+    /// number only, never on the thread count, so results stay the same at any number of
+    /// threads; a value other than 1 re-associates the batch sums once, so its numbers
+    /// differ (in the last bits, then along the run) from those of 1. Default 1 (one graph
+    /// over the whole batch, as before this key existed); e.g. 8 lets an update use up to
+    /// 8 cores beyond the critics' own split.
+    pub batch_chunks: usize,
     /// L2 regularisation factor. Default 1e-4 (MATLAB `L2RegularizationFactor`).
     pub l2: f64,
     /// Initial entropy weight α (SAC). Default 1.0 (MATLAB `EntropyWeight`, CleanRL).
@@ -121,6 +130,7 @@ impl Default for RlConfig {
             alpha_lr: 3e-4,
             grad_clip: 10.0,
             clip_targets: false,
+            batch_chunks: 1,
             l2: 1e-4,
             initial_alpha: 1.0,
             target_entropy: None,
@@ -205,6 +215,12 @@ impl RlConfig {
             "batch_size",
             self.batch_size as f64,
             "must be ≤ buffer_size (a batch is drawn from the buffer)",
+        )?;
+        check(
+            (1..=self.batch_size).contains(&self.batch_chunks),
+            "batch_chunks",
+            self.batch_chunks as f64,
+            "must be in [1, batch_size]",
         )?;
         check(
             self.seq_len > 0,

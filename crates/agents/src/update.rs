@@ -64,6 +64,84 @@ struct BurnIn {
     critic_targets: Vec<Option<LstmState>>,
 }
 
+/// One of the `rl.batch_chunks` fixed parts of a batch that the critic and actor losses run
+/// on side by side: batch entries `[b0, b1)` of the trained part, their TD targets and the
+/// actor's and critics' states after burn-in. The bounds depend on the batch size and the
+/// chunk count only. The loss normaliser stays the whole batch's 1/M, so the chunks' losses
+/// and gradients sum to the whole batch's.
+struct Chunk {
+    part: Trained,
+    y: Tensor,
+    actor: Option<LstmState>,
+    critics: Vec<Option<LstmState>>,
+}
+
+impl Chunk {
+    /// `count` chunks of `part` (one chunk: the whole batch, moved, not copied).
+    fn split(part: Trained, y: Tensor, st: BurnIn, count: usize) -> Vec<Chunk> {
+        let b = part.batch;
+        if count <= 1 || b <= 1 {
+            return vec![Chunk {
+                part,
+                y,
+                actor: st.actor,
+                critics: st.critics,
+            }];
+        }
+        let count = count.min(b);
+        (0..count)
+            .map(|c| {
+                let (b0, b1) = (c * b / count, (c + 1) * b / count);
+                let rows = |t: &Tensor| batch_rows(t, b, b0, b1);
+                let state = |s: &Option<LstmState>| {
+                    s.as_ref().map(|s| LstmState {
+                        h: s.h.rows_range(b0, b1 - b0),
+                        c: s.c.rows_range(b0, b1 - b0),
+                    })
+                };
+                Chunk {
+                    part: Trained {
+                        batch: b1 - b0,
+                        obs: rows(&part.obs),
+                        action: rows(&part.action),
+                        reward: rows(&part.reward),
+                        next_obs: rows(&part.next_obs),
+                        not_done: rows(&part.not_done),
+                        mask: rows(&part.mask),
+                        ..part
+                    },
+                    y: rows(&y),
+                    actor: state(&st.actor),
+                    critics: st.critics.iter().map(state).collect(),
+                }
+            })
+            .collect()
+    }
+}
+
+/// The rows of batch entries `[b0, b1)` of a time-major `(len·B, cols)` tensor, time-major
+/// `(len·(b1 − b0), cols)`.
+fn batch_rows(t: &Tensor, batch: usize, b0: usize, b1: usize) -> Tensor {
+    let cols = t.cols();
+    let len = t.rows() / batch;
+    let mut out = Vec::with_capacity(len * (b1 - b0) * cols);
+    for step in 0..len {
+        out.extend_from_slice(&t.data()[(step * batch + b0) * cols..(step * batch + b1) * cols]);
+    }
+    Tensor::from_vec(len * (b1 - b0), cols, out)
+}
+
+/// Adds the chunks' gradients (chunk order) into the first: the whole batch's gradient.
+fn sum_in_order(mut parts: impl Iterator<Item = Vec<f32>>) -> Vec<f32> {
+    let mut total = parts.next().expect("at least one chunk");
+    for g in parts {
+        for (t, x) in total.iter_mut().zip(&g) {
+            *t += x;
+        }
+    }
+    total
+}
+
 /// Rows `[t0·B, t1·B)` of a time-major `(W·B, cols)` array as a tensor.
 fn steps(data: &[f32], batch: usize, cols: usize, t0: usize, t1: usize) -> Tensor {
     Tensor::from_slice(
@@ -97,10 +175,11 @@ impl Agent {
         let part = self.trained_part(batch);
         let st = self.burn_in(batch);
         let y = self.td_target(&part, &st);
-        let (critic_loss, q_mean) = self.train_critics(&part, y, &st)?;
+        let chunks = Chunk::split(part, y, st, self.cfg.batch_chunks);
+        let (critic_loss, q_mean) = self.train_critics(&chunks)?;
         let mut actor_loss = None;
         if self.updates % self.rules.policy_delay == 0 {
-            actor_loss = Some(self.train_actor(&part, &st)?);
+            actor_loss = Some(self.train_actor(&chunks)?);
             self.update_targets()?;
         }
         self.updates += 1;
@@ -208,24 +287,22 @@ impl Agent {
     /// L(Qₖ) = 1/(2M) Σ m·(Qₖ(s, a) − y)²,
     ///
     /// M the masked steps. Returns the loss and the masked mean of Q₁. Each critic's loss
-    /// depends on its own parameters only, so each is its own graph, and the critics train
-    /// side by side on the rayon pool (the same numbers as one graph of their sum).
-    fn train_critics(
-        &mut self,
-        p: &Trained,
-        y: Tensor,
-        st: &BurnIn,
-    ) -> Result<(f64, f64), AgentError> {
-        let one_critic = |c: &Critic, state: &Option<LstmState>| {
+    /// depends on its own parameters only, and each chunk's share on its own rows, so every
+    /// (critic, chunk) pair is its own graph, all side by side on the rayon pool; a critic's
+    /// gradient is its chunks' summed in chunk order (one chunk: the same numbers as one
+    /// graph of the critics' sum).
+    fn train_critics(&mut self, chunks: &[Chunk]) -> Result<(f64, f64), AgentError> {
+        let one = |c: &Critic, ch: &Chunk, state: &Option<LstmState>| {
+            let p = &ch.part;
             let mut g = Graph::new();
             let (ov, av, yv, mv) = (
                 g.constant(p.obs.clone()),
                 g.constant(p.action.clone()),
-                g.constant(y.clone()),
+                g.constant(ch.y.clone()),
                 g.constant(p.mask.clone()),
             );
             let q = c.forward(&mut g, ov, av, p.batch, state.as_ref()).q;
-            let q_mean = g
+            let q_sum = g
                 .value(q)
                 .data()
                 .iter()
@@ -239,20 +316,43 @@ impl Agent {
             let s = g.sum(d2);
             let l = g.scale(s, 0.5 * p.norm);
             let lv = g.value(l).item();
-            (g.backward(l), lv, q_mean)
+            let grad = g
+                .backward(l)
+                .take(c.params())
+                .ok_or(esrl_nn::NnError::NoGradient {
+                    len: c.params().len(),
+                });
+            (grad, lv, q_sum)
         };
-        let mut per_critic: Vec<_> = self
-            .critics
-            .par_iter()
-            .zip(&st.critics)
-            .map(|(c, state)| one_critic(c, state))
+        let n = chunks.len();
+        let mut pairs: Vec<_> = (0..self.critics.len() * n)
+            .into_par_iter()
+            .map(|i| {
+                let (k, ch) = (i / n, &chunks[i % n]);
+                one(&self.critics[k], ch, &ch.critics[k])
+            })
             .collect();
+        // Per critic, its chunks in order: the summed gradient and loss (and Q₁'s mean).
+        let mut per_critic = Vec::with_capacity(self.critics.len());
+        let mut q_mean = 0.0;
+        for k in 0..self.critics.len() {
+            let mut grads = Vec::with_capacity(n);
+            let (mut loss, mut q_sum) = (None, None);
+            for (grad, lv, qs) in pairs.drain(..n) {
+                grads.push(grad?);
+                loss = Some(loss.map_or(lv, |t: f32| t + lv));
+                q_sum = Some(q_sum.map_or(qs, |t: f32| t + qs));
+            }
+            if k == 0 {
+                q_mean = q_sum.unwrap_or(0.0);
+            }
+            per_critic.push((sum_in_order(grads.into_iter()), loss.unwrap_or(0.0)));
+        }
         let loss = per_critic
             .iter()
             .map(|r| r.1)
             .reduce(|t, l| t + l)
             .expect("at least one critic");
-        let q_mean = per_critic[0].2;
         if !loss.is_finite() {
             return Err(AgentError::NonFinite {
                 what: "critic loss",
@@ -263,141 +363,196 @@ impl Agent {
             .par_iter_mut()
             .zip(&mut self.opt_critics)
             .zip(&mut per_critic)
-            .try_for_each(|((c, opt), (grads, _, _))| opt.apply(c.params_mut(), grads).map(drop))?;
+            .try_for_each(|((c, opt), (grad, _))| opt.step(c.params_mut(), grad).map(drop))?;
         Ok((f64::from(loss), f64::from(q_mean)))
     }
-
     /// The actor loss through the frozen critics, and one Adam step:
     ///
     /// - SAC (eq. 5): L(π) = 1/M Σ m·(α log π(ã|s) − minₖ Qₖ(s, ã)), ã ~ π(·|s) re-sampled;
     /// - TD3/DDPG: L(μ) = −1/M Σ m·Q₁(s, μ(s)).
     ///
-    /// Then α's step (SAC). The graph is cut at the action so the critics run side by side on
-    /// the rayon pool: the actor's graph gives ã (and log π); each critic's own graph gives
-    /// Qₖ(s, ã) with ã as a leaf; a small graph gives the loss, its value and its gradients
-    /// with respect to min Qₖ and log π; the minimum's derivative goes to the critic it chose
-    /// (ties to the first, as [`Graph::minimum`]); each critic's graph turns it into
-    /// ∂L/∂ã; their sum, last critic first as one graph's reverse pass would add them, and
-    /// ∂L/∂log π seed the actor's reverse pass. The same numbers as one graph of the whole loss.
-    fn train_actor(&mut self, p: &Trained, st: &BurnIn) -> Result<f64, AgentError> {
-        let batch = p.batch.max(1);
-        let stochastic = self.has_entropy();
-        // SAC takes the minimum of its critics; TD3 and DDPG follow Q₁.
-        let used = if stochastic { self.critics.len() } else { 1 };
-        let (mut grads, loss, log_prob) = {
-            let mut ga = Graph::new();
-            let ov = ga.constant(p.obs.clone());
-            let out = self.actor.forward(&mut ga, ov, batch, st.actor.as_ref());
-            let (act, log_prob) = if stochastic {
-                let s = self.actor.sample(&mut ga, &out, &mut self.rng);
-                (s.action, Some(s.log_prob))
+    /// Then α's step (SAC). SAC's ε is drawn for the whole batch first, in the order one
+    /// [`esrl_nn::Actor::sample`] over the batch draws it, and split like the batch; each
+    /// chunk's loss and actor gradient come from `actor_chunk`, side by side on the rayon
+    /// pool, and are summed in chunk order.
+    fn train_actor(&mut self, chunks: &[Chunk]) -> Result<f64, AgentError> {
+        let eps: Vec<Option<Tensor>> = if self.has_entropy() {
+            let b: usize = chunks.iter().map(|c| c.part.batch).sum();
+            let rows: usize = chunks.iter().map(|c| c.part.obs.rows()).sum();
+            let n = rows * self.act_dim;
+            let all: Vec<f32> = (0..n).map(|_| self.rng.sample(StandardNormal)).collect();
+            let all = Tensor::from_vec(rows, self.act_dim, all);
+            if chunks.len() == 1 {
+                vec![Some(all)]
             } else {
-                (self.actor.deterministic(&mut ga, &out), None)
-            };
-            let action = ga.value(act).clone();
-
-            // Each critic on its own graph: Qₖ(s, ã) with ã a leaf.
-            let mut critic_graphs: Vec<_> = self.critics[..used]
-                .par_iter()
-                .zip(&st.critics)
-                .map(|(c, state)| {
-                    let mut g = Graph::new();
-                    g.freeze(c.params());
-                    let o = g.constant(p.obs.clone());
-                    let a = g.leaf(action.clone());
-                    let q = c.forward(&mut g, o, a, batch, state.as_ref()).q;
-                    (g, a, q)
-                })
-                .collect();
-
-            // min Qₖ, and which critic each element's minimum came from.
-            let mut qmin = critic_graphs[0].0.value(critic_graphs[0].2).clone();
-            let mut chosen = vec![0usize; qmin.len()];
-            for (k, (g, _, q)) in critic_graphs.iter().enumerate().skip(1) {
-                for ((m, c), &x) in qmin
-                    .data_mut()
-                    .iter_mut()
-                    .zip(&mut chosen)
-                    .zip(g.value(*q).data())
-                {
-                    // `Graph::minimum`'s rule: the earlier operand unless it is not ≤ the
-                    // later one (NaN included).
-                    if (*m)
-                        .partial_cmp(&x)
-                        .is_none_or(|o| o == std::cmp::Ordering::Greater)
-                    {
-                        *c = k;
-                    }
-                    *m = m.min(x);
-                }
+                let mut b0 = 0;
+                chunks
+                    .iter()
+                    .map(|c| {
+                        let b1 = b0 + c.part.batch;
+                        let e = batch_rows(&all, b, b0, b1);
+                        b0 = b1;
+                        Some(e)
+                    })
+                    .collect()
             }
-
-            // The loss from min Q and log π.
-            let mut gl = Graph::new();
-            let qv = gl.leaf(qmin);
-            let mv = gl.constant(p.mask.clone());
-            let lpv = log_prob.map(|lp| gl.leaf(ga.value(lp).clone()));
-            let per_step = match lpv {
-                Some(lp) => {
-                    let alp = gl.scale(lp, p.alpha);
-                    gl.sub(alp, qv)
-                }
-                None => gl.neg(qv),
-            };
-            let masked = gl.mul(per_step, mv);
-            let s = gl.sum(masked);
-            let loss = gl.scale(s, p.norm);
-            let lv = gl.value(loss).item();
-            let dl = gl.backward(loss);
-            let dq = dl
-                .var(qv)
-                .cloned()
-                .unwrap_or_else(|| Tensor::zeros(p.mask.rows(), p.mask.cols()));
-
-            // ∂L/∂ã through each critic, from the share of ∂L/∂min Q it chose.
-            let dacts: Vec<Tensor> = critic_graphs
-                .par_iter_mut()
-                .enumerate()
-                .map(|(k, (g, a, q))| {
-                    let mut seed = Tensor::zeros(dq.rows(), dq.cols());
-                    for ((s, &d), &c) in seed.data_mut().iter_mut().zip(dq.data()).zip(&chosen) {
-                        *s += if c == k { d } else { 0.0 };
-                    }
-                    let grads = g.backward_with(*q, seed);
-                    grads
-                        .var(*a)
-                        .cloned()
-                        .unwrap_or_else(|| Tensor::zeros(action.rows(), action.cols()))
-                })
-                .collect();
-            let mut dact = dacts.last().expect("at least one critic").clone();
-            for d in dacts.iter().rev().skip(1) {
-                for (x, &y) in dact.data_mut().iter_mut().zip(d.data()) {
-                    *x += y;
-                }
-            }
-            drop(critic_graphs);
-
-            let mut seeds = vec![(act, dact)];
-            if let (Some(lp), Some(lpv)) = (log_prob, lpv) {
-                if let Some(d) = dl.var(lpv) {
-                    seeds.push((lp, d.clone()));
-                }
-            }
-            let lp_values = log_prob.map(|lp| ga.value(lp).clone());
-            (ga.backward_seeded(seeds), lv, lp_values)
+        } else {
+            vec![None; chunks.len()]
         };
+        let parts: Vec<_> = chunks
+            .par_iter()
+            .zip(eps)
+            .map(|(ch, eps)| self.actor_chunk(ch, eps))
+            .collect();
+        let mut grads = Vec::with_capacity(parts.len());
+        let mut loss: Option<f32> = None;
+        let mut log_probs = Vec::with_capacity(parts.len());
+        for (grad, lv, lp) in parts {
+            grads.push(grad?);
+            loss = Some(loss.map_or(lv, |t| t + lv));
+            log_probs.extend(lp);
+        }
+        let loss = loss.unwrap_or(0.0);
         if !loss.is_finite() {
             return Err(AgentError::NonFinite {
                 what: "actor loss",
                 update: self.updates,
             });
         }
-        self.opt_actor.apply(self.actor.params_mut(), &mut grads)?;
-        if let Some(lp) = log_prob {
-            self.train_alpha(&lp, p)?;
+        let mut grad = sum_in_order(grads.into_iter());
+        self.opt_actor.step(self.actor.params_mut(), &mut grad)?;
+        if !log_probs.is_empty() {
+            self.train_alpha(&log_probs, chunks)?;
         }
         Ok(f64::from(loss))
+    }
+
+    /// One chunk's share of the actor loss: the actor's gradient, the loss and (SAC) log π of
+    /// the samples drawn with `eps`. The graph is cut at the action so the critics run side
+    /// by side on the rayon pool: the actor's graph gives ã (and log π); each critic's own
+    /// graph gives Qₖ(s, ã) with ã as a leaf; a small graph gives the loss, its value and its
+    /// gradients with respect to min Qₖ and log π; the minimum's derivative goes to the
+    /// critic it chose (ties to the first, as [`Graph::minimum`]); each critic's graph turns
+    /// it into ∂L/∂ã; their sum, last critic first as one graph's reverse pass would add
+    /// them, and ∂L/∂log π seed the actor's reverse pass. The same numbers as one graph of
+    /// the whole loss.
+    #[allow(clippy::type_complexity)]
+    fn actor_chunk(
+        &self,
+        ch: &Chunk,
+        eps: Option<Tensor>,
+    ) -> (Result<Vec<f32>, esrl_nn::NnError>, f32, Option<Tensor>) {
+        let p = &ch.part;
+        let batch = p.batch.max(1);
+        // SAC takes the minimum of its critics; TD3 and DDPG follow Q₁.
+        let used = if eps.is_some() { self.critics.len() } else { 1 };
+        let mut ga = Graph::new();
+        let ov = ga.constant(p.obs.clone());
+        let out = self.actor.forward(&mut ga, ov, batch, ch.actor.as_ref());
+        let (act, log_prob) = match eps {
+            Some(eps) => {
+                let s = self.actor.sample_with_noise(&mut ga, &out, eps);
+                (s.action, Some(s.log_prob))
+            }
+            None => (self.actor.deterministic(&mut ga, &out), None),
+        };
+        let action = ga.value(act).clone();
+
+        // Each critic on its own graph: Qₖ(s, ã) with ã a leaf.
+        let mut critic_graphs: Vec<_> = self.critics[..used]
+            .par_iter()
+            .zip(&ch.critics)
+            .map(|(c, state)| {
+                let mut g = Graph::new();
+                g.freeze(c.params());
+                let o = g.constant(p.obs.clone());
+                let a = g.leaf(action.clone());
+                let q = c.forward(&mut g, o, a, batch, state.as_ref()).q;
+                (g, a, q)
+            })
+            .collect();
+
+        // min Qₖ, and which critic each element's minimum came from.
+        let mut qmin = critic_graphs[0].0.value(critic_graphs[0].2).clone();
+        let mut chosen = vec![0usize; qmin.len()];
+        for (k, (g, _, q)) in critic_graphs.iter().enumerate().skip(1) {
+            for ((m, c), &x) in qmin
+                .data_mut()
+                .iter_mut()
+                .zip(&mut chosen)
+                .zip(g.value(*q).data())
+            {
+                // `Graph::minimum`'s rule: the earlier operand unless it is not ≤ the
+                // later one (NaN included).
+                if (*m)
+                    .partial_cmp(&x)
+                    .is_none_or(|o| o == std::cmp::Ordering::Greater)
+                {
+                    *c = k;
+                }
+                *m = m.min(x);
+            }
+        }
+
+        // The loss from min Q and log π.
+        let mut gl = Graph::new();
+        let qv = gl.leaf(qmin);
+        let mv = gl.constant(p.mask.clone());
+        let lpv = log_prob.map(|lp| gl.leaf(ga.value(lp).clone()));
+        let per_step = match lpv {
+            Some(lp) => {
+                let alp = gl.scale(lp, p.alpha);
+                gl.sub(alp, qv)
+            }
+            None => gl.neg(qv),
+        };
+        let masked = gl.mul(per_step, mv);
+        let s = gl.sum(masked);
+        let loss = gl.scale(s, p.norm);
+        let lv = gl.value(loss).item();
+        let dl = gl.backward(loss);
+        let dq = dl
+            .var(qv)
+            .cloned()
+            .unwrap_or_else(|| Tensor::zeros(p.mask.rows(), p.mask.cols()));
+
+        // ∂L/∂ã through each critic, from the share of ∂L/∂min Q it chose.
+        let dacts: Vec<Tensor> = critic_graphs
+            .par_iter_mut()
+            .enumerate()
+            .map(|(k, (g, a, q))| {
+                let mut seed = Tensor::zeros(dq.rows(), dq.cols());
+                for ((s, &d), &c) in seed.data_mut().iter_mut().zip(dq.data()).zip(&chosen) {
+                    *s += if c == k { d } else { 0.0 };
+                }
+                let grads = g.backward_with(*q, seed);
+                grads
+                    .var(*a)
+                    .cloned()
+                    .unwrap_or_else(|| Tensor::zeros(action.rows(), action.cols()))
+            })
+            .collect();
+        let mut dact = dacts.last().expect("at least one critic").clone();
+        for d in dacts.iter().rev().skip(1) {
+            for (x, &y) in dact.data_mut().iter_mut().zip(d.data()) {
+                *x += y;
+            }
+        }
+        drop(critic_graphs);
+
+        let mut seeds = vec![(act, dact)];
+        if let (Some(lp), Some(lpv)) = (log_prob, lpv) {
+            if let Some(d) = dl.var(lpv) {
+                seeds.push((lp, d.clone()));
+            }
+        }
+        let lp_values = log_prob.map(|lp| ga.value(lp).clone());
+        let grad = ga.backward_seeded(seeds).take(self.actor.params()).ok_or(
+            esrl_nn::NnError::NoGradient {
+                len: self.actor.params().len(),
+            },
+        );
+        (grad, lv, lp_values)
     }
 
     /// Eq. 6, one Adam step on log α when α is learned:
@@ -406,17 +561,23 @@ impl Agent {
     ///
     /// the mean over the masked steps of the actor loss's samples. A non-finite gradient
     /// skips the step.
-    fn train_alpha(&mut self, log_prob: &Tensor, p: &Trained) -> Result<(), AgentError> {
+    fn train_alpha(&mut self, log_probs: &[Tensor], chunks: &[Chunk]) -> Result<(), AgentError> {
         let Some(entropy) = self.rules.entropy.filter(|e| e.learn) else {
             return Ok(());
         };
-        let mean_lp: f32 = log_prob
-            .data()
+        let mean_lp: f32 = log_probs
             .iter()
-            .zip(p.mask.data())
-            .map(|(l, m)| l * m)
-            .sum::<f32>()
-            * p.norm;
+            .zip(chunks)
+            .map(|(lp, ch)| {
+                lp.data()
+                    .iter()
+                    .zip(ch.part.mask.data())
+                    .map(|(l, m)| l * m)
+                    .sum::<f32>()
+            })
+            .reduce(|t, s| t + s)
+            .unwrap_or(0.0)
+            * chunks[0].part.norm;
         let mut grad = [-(mean_lp + entropy.target)];
         if grad[0].is_finite() {
             self.opt_alpha.step(&mut self.log_alpha, &mut grad)?;

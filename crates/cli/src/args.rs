@@ -199,6 +199,10 @@ pub enum BenchWhat {
         /// Threads the update's products may use.
         #[arg(long, default_value_t = 1)]
         threads: usize,
+        /// Chunks the batch is split into (`rl.batch_chunks`: each chunk's forward and
+        /// backward on its own thread, gradients summed in chunk order).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
+        batch_chunks: u64,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,

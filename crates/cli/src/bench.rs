@@ -20,8 +20,15 @@ fn emit<T: Serialize>(json_out: bool, value: &T, text: String) -> Result<()> {
 
 /// Times the one update of training, `Agent::update` (critics, actor, α, targets), for SAC
 /// with the paper-size LSTM or the MLP 256×256 networks, on random data of the PyTorch
-/// baseline's shapes (`esrl_agents::bench`), on a pool of `threads` threads.
-pub fn update_ms(arch: Arch, obs_dim: usize, reps: usize, threads: usize) -> Result<UpdateTiming> {
+/// baseline's shapes (`esrl_agents::bench`), on a pool of `threads` threads, the batch split
+/// into `batch_chunks` chunks (`rl.batch_chunks`).
+pub fn update_ms(
+    arch: Arch,
+    obs_dim: usize,
+    reps: usize,
+    threads: usize,
+    batch_chunks: usize,
+) -> Result<UpdateTiming> {
     let nets = match arch {
         Arch::Lstm => NetConfig::default(),
         Arch::Mlp => NetConfig::feed_forward(),
@@ -29,7 +36,7 @@ pub fn update_ms(arch: Arch, obs_dim: usize, reps: usize, threads: usize) -> Res
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .build()?;
-    Ok(pool.install(|| bench::time_update(Algo::Sac, &nets, obs_dim, 6, reps, 2))?)
+    Ok(pool.install(|| bench::time_update(Algo::Sac, &nets, obs_dim, 6, reps, 2, batch_chunks))?)
 }
 
 /// Generations timed by `bench es` (without gradient updates, so the policies stay random).
@@ -113,8 +120,8 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             let r = esrl_nn::bench::run(&esrl_nn::bench::BenchConfig::default())?;
             let c = &r.config;
             // The full update is training's own (`Agent::update`), on the same shapes.
-            let lstm = update_ms(Arch::Lstm, c.obs_dim, c.reps, 1)?;
-            let mlp = update_ms(Arch::Mlp, c.obs_dim, c.reps * 5, 1)?;
+            let lstm = update_ms(Arch::Lstm, c.obs_dim, c.reps, 1, 1)?;
+            let mlp = update_ms(Arch::Mlp, c.obs_dim, c.reps * 5, 1, 1)?;
             let ms = |t: &UpdateTiming| format!("{:.1} ms", t.ms_per_update);
             let text = format!(
                 "forward + backward on {} × {} steps, one thread:\n  \
@@ -143,13 +150,14 @@ pub fn run(what: &BenchWhat) -> Result<()> {
         BenchWhat::Update {
             arch,
             threads,
+            batch_chunks,
             json,
         } => {
-            let t = update_ms(*arch, 31, 7, *threads)?;
+            let t = update_ms(*arch, 31, 7, *threads, *batch_chunks as usize)?;
             let arch = format!("{arch:?}").to_lowercase();
             let text = format!(
-                "one SAC update ({arch}, {threads} thread(s)): {:.2} ms median over {} reps \
-                 (actor {} params, critic {} params)",
+                "one SAC update ({arch}, {threads} thread(s), {batch_chunks} batch chunk(s)): \
+                 {:.2} ms median over {} reps (actor {} params, critic {} params)",
                 t.ms_per_update, t.reps, t.actor_params, t.critic_params
             );
             let r = json!({
@@ -160,6 +168,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                 "actor_params": t.actor_params,
                 "critic_params": t.critic_params,
                 "threads": threads,
+                "batch_chunks": batch_chunks,
             });
             emit(*json, &r, text)
         }
@@ -177,8 +186,9 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             } else {
                 Arch::Mlp
             };
-            let upd = update_ms(arch, 31, 3, 1)?.ms_per_update;
-            let upd_n = update_ms(arch, 31, 3, *threads)?.ms_per_update;
+            let chunks = cfg.rl.batch_chunks;
+            let upd = update_ms(arch, 31, 3, 1, chunks)?.ms_per_update;
+            let upd_n = update_ms(arch, 31, 3, *threads, chunks)?.ms_per_update;
             let train_s = upd * cfg.inner_cycles as f64 / 1e3;
             let (g1, whole) = whole_generation_s(*preset, 1, None)?;
             let (gn, _) = whole_generation_s(*preset, *threads, Some(whole))?;
