@@ -137,6 +137,36 @@ fn the_gated_forward_term_is_paid_only_upright_and_tall() {
 }
 
 #[test]
+fn the_capped_forward_term_pays_speed_up_to_the_cap() {
+    let action = [0.3, 0.2, -0.6, 0.3, 0.2, -0.6];
+    let cap = 0.05;
+    let mut config = WalkConfig::default();
+    config.reward.forward = 2.0;
+    config.reward.forward_cap = Some(cap);
+    let mut env = WalkEnv::new(config.clone()).unwrap();
+    env.reset(2);
+    let (mut above, mut below) = (0, 0);
+    for _ in 0..60 {
+        let s = env.step(&action);
+        let (f, v) = (term(&s, "forward").unwrap(), gait(&s).forward_velocity);
+        if v > cap {
+            assert_eq!(f, 2.0 * cap, "vx {v}");
+            above += 1;
+        } else {
+            assert_eq!(f, 2.0 * v);
+            below += 1;
+        }
+        if s.terminated {
+            break;
+        }
+    }
+    assert!(above > 0 && below > 0, "above {above}, below {below}");
+    config.reward.forward_cap = Some(0.0);
+    let e = WalkEnv::new(config).err().expect("a cap of 0 is refused");
+    assert!(e.to_string().contains("reward.forward_cap"), "{e}");
+}
+
+#[test]
 fn the_episode_ends_off_course_past_the_lateral_limit() {
     let mut config = WalkConfig::default();
     let max = 0.005;

@@ -41,6 +41,13 @@ pub struct RewardConfig {
     /// `max_height_drop` under its standing height. Default none (eq. 12 pays it always).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub forward_gate: Option<UprightGate>,
+    /// Pay the forward term for speed up to this many m/s: `w_v·min(vx, cap)`. On a track
+    /// that goes on past its line (`end_at_finish = false`) an uncapped forward term pays
+    /// every extra m/s, and the kept policies traded their walk for faster hops and
+    /// shuffles; capped, a walk at the cap earns all the forward reward there is. Default
+    /// none (eq. 12 pays any speed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub forward_cap: Option<f32>,
 }
 
 impl Default for RewardConfig {
@@ -54,6 +61,7 @@ impl Default for RewardConfig {
             action_sq: 0.0,
             torque_sq: 0.0,
             forward_gate: None,
+            forward_cap: None,
         }
     }
 }
@@ -440,6 +448,9 @@ impl WalkConfig {
         fin("reward.alive", self.reward.alive)?;
         nonneg("reward.action_sq", self.reward.action_sq)?;
         nonneg("reward.torque_sq", self.reward.torque_sq)?;
+        if let Some(c) = self.reward.forward_cap {
+            pos("reward.forward_cap", c)?;
+        }
         if let Some(g) = &self.reward.forward_gate {
             pos("reward.forward_gate.max_tilt", g.max_tilt)?;
             pos("reward.forward_gate.max_height_drop", g.max_height_drop)?;

@@ -104,7 +104,9 @@
 //! - `reward.forward_gate = { max_tilt, max_height_drop }`: `forward` is 0 on steps where the
 //!   torso tilts more than `max_tilt` from vertical or is more than `max_height_drop` below its
 //!   standing height (DeepMind Control's walker pays its move reward only in proportion to
-//!   its stand reward).
+//!   its stand reward);
+//! - `reward.forward_cap = c`: `forward` pays `w_v·min(vx, c)`, no reward for speed above `c`
+//!   m/s (for a track that goes on past its line, where every extra m/s would pay).
 //!
 //! # Episode
 //!

@@ -107,7 +107,14 @@ pub(super) fn judge(
         .is_none_or(|g| tilt <= g.max_tilt && z >= -g.max_height_drop);
     let p_mean = e.abs_power.iter().sum::<f32>() / e.abs_power.len() as f32;
     let mut terms = vec![
-        ("forward", if upright { w.forward * vx } else { 0.0 }),
+        (
+            "forward",
+            if upright {
+                w.forward * w.forward_cap.map_or(vx, |c| vx.min(c))
+            } else {
+                0.0
+            },
+        ),
         ("lateral", -w.lateral * y * y),
         ("height", -w.height * z * z),
         ("power", -w.power * p_mean),
