@@ -72,3 +72,78 @@ fn best_folder_holds_the_policy_that_scored_the_best_curve_value() {
         assert_ne!(last["episodes"][0]["return"].as_f64().unwrap(), ret);
     }
 }
+
+#[test]
+fn best_snapshots_hold_the_best_policy_as_it_stood_at_each_step_mark() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("run");
+    let every = 100u64;
+    let config = tmp.path().join("snapshots.toml");
+    std::fs::write(&config, format!("best_every_steps = {every}\n")).unwrap();
+    common::smoke(
+        "es-td3",
+        &run,
+        &[
+            "--seed",
+            "3",
+            "--generations",
+            "6",
+            "--threads",
+            "1",
+            "--config",
+            config.to_str().unwrap(),
+        ],
+    );
+    // From the metric rows alone: after each row, the best generation so far; a mark k·every
+    // reached by row i holds the best of rows 0..=i.
+    let rows = common::rows(&run);
+    let mut expected = Vec::new();
+    let (mut best_gen, mut best, mut before) = (0, f64::NEG_INFINITY, 0u64);
+    for (i, r) in rows.iter().enumerate() {
+        let (c, steps) = (
+            r["curve"].as_f64().unwrap(),
+            r["env_steps"].as_u64().unwrap(),
+        );
+        if c > best {
+            (best_gen, best) = (i, c);
+        }
+        for k in before / every + 1..=steps / every {
+            expected.push((format!("best-{}", k * every), best_gen, best));
+        }
+        before = steps;
+    }
+    assert!(
+        expected.len() >= 3,
+        "{} marks in {before} steps",
+        expected.len()
+    );
+    let mut found: Vec<String> = std::fs::read_dir(&run)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.starts_with("best-"))
+        .collect();
+    found.sort();
+    let mut names: Vec<String> = expected.iter().map(|e| e.0.clone()).collect();
+    names.sort();
+    assert_eq!(found, names, "no temporary or extra folders either");
+    for (name, generation, fitness) in &expected {
+        let info = read_json(&run.join(name).join("best.json"));
+        assert_eq!(
+            info["generation"].as_u64().unwrap() as usize,
+            *generation,
+            "{name}"
+        );
+        assert_eq!(info["fitness"].as_f64().unwrap(), *fitness, "{name}");
+    }
+    // A snapshot is a policy folder `esrl eval` takes like `best/`.
+    let (name, ..) = &expected[0];
+    let report: Value = serde_json::from_str(&esrl(&[
+        "eval",
+        run.join(name).to_str().unwrap(),
+        "--episodes",
+        "1",
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(report["episodes"].as_array().unwrap().len(), 1);
+}

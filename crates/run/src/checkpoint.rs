@@ -300,11 +300,56 @@ pub fn save_best(run: &Path, agent: &Agent, info: &BestInfo) -> Result<()> {
     swap_in(&tmp, &run.join(BEST), &run.join("best.old"))
 }
 
-/// Removes `RUN/best/` (a run started over must not keep a policy of its previous start).
+/// The folder of [`snapshot_best`] at `steps` environment steps: `best-2M`, `best-500k`,
+/// `best-1234`.
+pub fn best_snapshot_name(steps: u64) -> String {
+    if steps % 1_000_000 == 0 {
+        format!("{BEST}-{}M", steps / 1_000_000)
+    } else if steps % 1000 == 0 {
+        format!("{BEST}-{}k", steps / 1000)
+    } else {
+        format!("{BEST}-{steps}")
+    }
+}
+
+/// Copies `RUN/best/` as it stands to `RUN/best-<steps>/` ([`best_snapshot_name`]), through
+/// a temporary folder swapped in like a checkpoint: the policy a run kept at that point of
+/// its budget, for `esrl eval RUN/best-2M` (`best/` itself moves on to whatever scores
+/// higher later). Nothing is written while there is no `best/`.
+pub fn snapshot_best(run: &Path, steps: u64) -> Result<()> {
+    let best = run.join(BEST);
+    if !best.is_dir() {
+        return Ok(());
+    }
+    let name = best_snapshot_name(steps);
+    let tmp = fresh_dir(&run.join(format!("{name}.tmp")))?;
+    for entry in fs::read_dir(&best).with_context(|| format!("reading {}", best.display()))? {
+        let path = entry?.path();
+        if path.is_file() {
+            let to = tmp.join(path.file_name().expect("a file has a name"));
+            fs::copy(&path, &to).with_context(|| format!("copying {}", path.display()))?;
+        }
+    }
+    swap_in(&tmp, &run.join(&name), &run.join(format!("{name}.old")))
+}
+
+/// Removes `RUN/best/` and its snapshots `RUN/best-*/` (a run started over must not keep a
+/// policy of its previous start).
 pub fn remove_best(run: &Path) -> Result<()> {
     let dir = run.join(BEST);
     if dir.exists() {
         fs::remove_dir_all(&dir).with_context(|| format!("removing {}", dir.display()))?;
+    }
+    let prefix = format!("{BEST}-");
+    for entry in fs::read_dir(run).with_context(|| format!("reading {}", run.display()))? {
+        let path = entry?.path();
+        let snapshot = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .is_some_and(|n| n.starts_with(&prefix));
+        if snapshot && path.is_dir() {
+            fs::remove_dir_all(&path).with_context(|| format!("removing {}", path.display()))?;
+        }
     }
     Ok(())
 }

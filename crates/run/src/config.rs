@@ -209,6 +209,11 @@ pub struct TrainConfig {
     pub updates_per_step: Option<f64>,
     /// Write a checkpoint every this many generations/episodes (and at the end).
     pub checkpoint_every: usize,
+    /// Every this many environment steps, keep a copy of `RUN/best/` as it stands then in
+    /// `RUN/best-<steps>/` (e.g. `best-2M`), so the policy a run kept at each point of its
+    /// budget can be evaluated after `best/` has moved on. Default none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub best_every_steps: Option<u64>,
     /// The walking environment.
     pub walk: WalkConfig,
     /// Actor and critic networks.
@@ -234,6 +239,7 @@ impl TrainConfig {
             inner_cycles: 50,
             updates_per_step: None,
             checkpoint_every: 10,
+            best_every_steps: None,
             walk: WalkConfig::default(),
             network: NetConfig::default(),
             rl: RlConfig::for_algo(agent.algo()),
@@ -323,6 +329,9 @@ impl TrainConfig {
         // and episode counts are upper bounds that the step budget ends first.
         self.max_env_steps = Some(4_000_000);
         self.generations = 3000;
+        // `best/` as it stood at 1, 2 and 3 M steps: the higher score that replaces it later
+        // is not always the better gait.
+        self.best_every_steps = Some(1_000_000);
         if self.agent.is_hybrid() {
             // One gradient update per 4 environment steps: the inner cycles of a generation
             // scale with the steps it collected.
@@ -451,6 +460,9 @@ impl TrainConfig {
         }
         if self.max_env_steps == Some(0) {
             bail!("max_env_steps = 0 (--steps 0): the budget must allow at least one step");
+        }
+        if self.best_every_steps == Some(0) {
+            bail!("best_every_steps = 0: must be ≥ 1 (or left out)");
         }
         if self.checkpoint_every == 0 {
             bail!("checkpoint_every = 0: must be ≥ 1");

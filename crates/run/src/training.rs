@@ -157,10 +157,12 @@ impl<L: Learner> Training<L> {
     }
 
     /// Runs one row and writes it: the metrics row (with `wall_s`), `RUN/best/` when the row
-    /// beat every earlier one, the summary, and a checkpoint when one is due. A learner that
+    /// beat every earlier one, a copy of it for each multiple of `best_every_steps` the row's
+    /// steps passed, the summary, and a checkpoint when one is due. A learner that
     /// diverges (a non-finite loss or return) ends the session with an error that keeps the
     /// last good checkpoint.
     pub fn step(&mut self) -> Result<RowDone> {
+        let steps_before = self.learner.env_steps();
         let (learner, envs) = (&mut self.learner, self.envs.as_ref());
         let row = match self.pool.install(|| learner.run_row(envs)) {
             Ok(row) if !row.curve().is_finite() => Err(AgentError::NonFinite {
@@ -192,6 +194,13 @@ impl<L: Learner> Training<L> {
                     env_steps: self.learner.env_steps(),
                 };
                 checkpoint::save_best(&self.root, &agent, &info)?;
+            }
+        }
+        if let Some(every) = self.cfg.best_every_steps {
+            // Each multiple of `every` this row's steps reached: `best/` as it stands now.
+            let steps = self.learner.env_steps();
+            for k in steps_before / every + 1..=steps / every {
+                checkpoint::snapshot_best(&self.root, k * every)?;
             }
         }
         self.state.rows += 1;

@@ -30,6 +30,7 @@ fn walking_is_quick_with_the_documented_overlay() {
         );
         assert_eq!(walking.updates_per_step, Some(0.25));
         assert_eq!(walking.max_env_steps, Some(4_000_000));
+        assert_eq!(walking.best_every_steps, Some(1_000_000));
         assert!(walking.walk.gait_clock.is_some());
         assert_eq!(walking.walk.target.range, Some(0.3));
     }
