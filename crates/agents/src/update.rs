@@ -21,7 +21,6 @@ use crate::agent::{Agent, AgentError, Smoothing, UpdateStats};
 use crate::replay::SequenceBatch;
 use esrl_nn::{Critic, Graph, LstmState, Module, Tensor};
 use rand::Rng;
-use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use rayon::prelude::*;
 
@@ -71,21 +70,27 @@ struct BurnIn {
 /// and gradients sum to the whole batch's.
 struct Chunk {
     part: Trained,
+    /// The TD targets (`td_targets`; empty until then).
     y: Tensor,
     actor: Option<LstmState>,
     critics: Vec<Option<LstmState>>,
+    /// The state of the actor that picks a′ at s′.
+    actor_next: Option<LstmState>,
+    critic_targets: Vec<Option<LstmState>>,
 }
 
 impl Chunk {
     /// `count` chunks of `part` (one chunk: the whole batch, moved, not copied).
-    fn split(part: Trained, y: Tensor, st: BurnIn, count: usize) -> Vec<Chunk> {
+    fn split(part: Trained, st: BurnIn, count: usize) -> Vec<Chunk> {
         let b = part.batch;
         if count <= 1 || b <= 1 {
             return vec![Chunk {
                 part,
-                y,
+                y: Tensor::zeros(0, 0),
                 actor: st.actor,
                 critics: st.critics,
+                actor_next: st.actor_next,
+                critic_targets: st.critic_targets,
             }];
         }
         let count = count.min(b);
@@ -110,9 +115,11 @@ impl Chunk {
                         mask: rows(&part.mask),
                         ..part
                     },
-                    y: rows(&y),
+                    y: Tensor::zeros(0, 0),
                     actor: state(&st.actor),
                     critics: st.critics.iter().map(state).collect(),
+                    actor_next: state(&st.actor_next),
+                    critic_targets: st.critic_targets.iter().map(state).collect(),
                 }
             })
             .collect()
@@ -161,10 +168,10 @@ fn apply_resets(state: &mut Option<LstmState>, reset: &[bool]) {
     }
 }
 
-/// TD3's target policy smoothing: a′ ← clip(a′ + clip(ε, −c, c), −1, 1), ε ~ N(0, σ²).
-fn smooth(a: &mut Tensor, s: Smoothing, rng: &mut ChaCha8Rng) {
-    for x in a.data_mut() {
-        let e: f32 = rng.sample(StandardNormal);
+/// TD3's target policy smoothing: a′ ← clip(a′ + clip(σ·ε, −c, c), −1, 1), `eps` the
+/// standard normal ε of each element.
+fn smooth(a: &mut Tensor, s: Smoothing, eps: &[f32]) {
+    for (x, e) in a.data_mut().iter_mut().zip(eps) {
         *x = (*x + (s.sd * e).clamp(-s.clip, s.clip)).clamp(-1.0, 1.0);
     }
 }
@@ -174,8 +181,8 @@ impl Agent {
     pub fn update(&mut self, batch: &SequenceBatch) -> Result<UpdateStats, AgentError> {
         let part = self.trained_part(batch);
         let st = self.burn_in(batch);
-        let y = self.td_target(&part, &st);
-        let chunks = Chunk::split(part, y, st, self.cfg.batch_chunks);
+        let mut chunks = Chunk::split(part, st, self.cfg.batch_chunks);
+        self.td_targets(&mut chunks);
         let (critic_loss, q_mean) = self.train_critics(&chunks)?;
         let mut actor_loss = None;
         if self.updates % self.rules.policy_delay == 0 {
@@ -217,20 +224,63 @@ impl Agent {
         }
     }
 
-    /// Eq. 3, without gradients:
+    /// Eq. 3, without gradients, into each chunk's `y`:
     ///
     /// y = r + γ(1 − d)(minₖ Q̄ₖ(s′, a′) − α log π(a′|s′)),
     ///
     /// with a′ ~ π(·|s′) for SAC; for TD3/DDPG a′ = μ̄(s′) from the target actor, smoothed
     /// to clip(a′ + clip(ε, −c, c), −1, 1) when `target_noise` > 0, and no entropy term.
-    fn td_target(&mut self, p: &Trained, st: &BurnIn) -> Tensor {
+    /// The noise (SAC's ε, TD3's smoothing ε) is drawn for the whole batch first, in the
+    /// order one pass over the batch draws it, and split like the batch; the chunks then run
+    /// side by side on the rayon pool.
+    fn td_targets(&mut self, chunks: &mut [Chunk]) {
+        let b: usize = chunks.iter().map(|c| c.part.batch).sum();
+        let rows: usize = chunks.iter().map(|c| c.part.next_obs.rows()).sum();
+        let draws = match (&self.actor_target, self.rules.smoothing) {
+            (None, _) | (Some(_), Some(_)) => rows * self.act_dim,
+            (Some(_), None) => 0,
+        };
+        let noise: Vec<f32> = (0..draws)
+            .map(|_| self.rng.sample(StandardNormal))
+            .collect();
+        let noise = (draws > 0).then(|| Tensor::from_vec(rows, self.act_dim, noise));
+        let mut b0 = 0;
+        let noise: Vec<Option<Tensor>> = chunks
+            .iter()
+            .map(|c| {
+                let b1 = b0 + c.part.batch;
+                let n = noise.as_ref().map(|n| {
+                    if chunks.len() == 1 {
+                        n.clone()
+                    } else {
+                        batch_rows(n, b, b0, b1)
+                    }
+                });
+                b0 = b1;
+                n
+            })
+            .collect();
+        let ys: Vec<Tensor> = chunks
+            .par_iter()
+            .zip(noise)
+            .map(|(c, n)| self.td_target(c, n))
+            .collect();
+        for (c, y) in chunks.iter_mut().zip(ys) {
+            c.y = y;
+        }
+    }
+
+    /// One chunk's TD targets (`td_targets`), `noise` its share of the batch's noise.
+    fn td_target(&self, ch: &Chunk, noise: Option<Tensor>) -> Tensor {
+        let p = &ch.part;
         let b = p.batch;
         let mut g = Graph::no_grad();
         let o2 = g.constant(p.next_obs.clone());
         let (a2, entropy) = match &self.actor_target {
             None => {
-                let out = self.actor.forward(&mut g, o2, b, st.actor_next.as_ref());
-                let s = self.actor.sample(&mut g, &out, &mut self.rng);
+                let out = self.actor.forward(&mut g, o2, b, ch.actor_next.as_ref());
+                let eps = noise.expect("SAC draws a′");
+                let s = self.actor.sample_with_noise(&mut g, &out, eps);
                 let ent: Vec<f32> = g
                     .value(s.log_prob)
                     .data()
@@ -240,11 +290,11 @@ impl Agent {
                 (g.value(s.action).clone(), Some(ent))
             }
             Some(target) => {
-                let out = target.forward(&mut g, o2, b, st.actor_next.as_ref());
+                let out = target.forward(&mut g, o2, b, ch.actor_next.as_ref());
                 let det = target.deterministic(&mut g, &out);
                 let mut a2 = g.value(det).clone();
-                if let Some(s) = self.rules.smoothing {
-                    smooth(&mut a2, s, &mut self.rng);
+                if let (Some(s), Some(eps)) = (self.rules.smoothing, noise) {
+                    smooth(&mut a2, s, eps.data());
                 }
                 (a2, None)
             }
@@ -253,7 +303,7 @@ impl Agent {
         let qs: Vec<Vec<f32>> = self
             .critic_targets
             .par_iter()
-            .zip(&st.critic_targets)
+            .zip(&ch.critic_targets)
             .map(|(c, state)| {
                 let mut g = Graph::no_grad();
                 let (o2, a2) = (g.constant(p.next_obs.clone()), g.constant(a2.clone()));
