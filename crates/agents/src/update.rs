@@ -234,32 +234,11 @@ impl Agent {
     /// order one pass over the batch draws it, and split like the batch; the chunks then run
     /// side by side on the rayon pool.
     fn td_targets(&mut self, chunks: &mut [Chunk]) {
-        let b: usize = chunks.iter().map(|c| c.part.batch).sum();
-        let rows: usize = chunks.iter().map(|c| c.part.next_obs.rows()).sum();
-        let draws = match (&self.actor_target, self.rules.smoothing) {
-            (None, _) | (Some(_), Some(_)) => rows * self.act_dim,
-            (Some(_), None) => 0,
+        let draw = match &self.actor_target {
+            None => true,
+            Some(_) => self.rules.smoothing.is_some(),
         };
-        let noise: Vec<f32> = (0..draws)
-            .map(|_| self.rng.sample(StandardNormal))
-            .collect();
-        let noise = (draws > 0).then(|| Tensor::from_vec(rows, self.act_dim, noise));
-        let mut b0 = 0;
-        let noise: Vec<Option<Tensor>> = chunks
-            .iter()
-            .map(|c| {
-                let b1 = b0 + c.part.batch;
-                let n = noise.as_ref().map(|n| {
-                    if chunks.len() == 1 {
-                        n.clone()
-                    } else {
-                        batch_rows(n, b, b0, b1)
-                    }
-                });
-                b0 = b1;
-                n
-            })
-            .collect();
+        let noise = self.chunk_noise(chunks, draw);
         let ys: Vec<Tensor> = chunks
             .par_iter()
             .zip(noise)
@@ -268,6 +247,34 @@ impl Agent {
         for (c, y) in chunks.iter_mut().zip(ys) {
             c.y = y;
         }
+    }
+
+    /// With `draw`, one standard normal per action dimension for every row of the batch,
+    /// drawn from the agent's stream in row order (the order one pass over the whole batch
+    /// draws them) and split like the batch into the chunks' shares; without, none.
+    fn chunk_noise(&mut self, chunks: &[Chunk], draw: bool) -> Vec<Option<Tensor>> {
+        if !draw {
+            return vec![None; chunks.len()];
+        }
+        let b: usize = chunks.iter().map(|c| c.part.batch).sum();
+        let rows: usize = chunks.iter().map(|c| c.part.obs.rows()).sum();
+        let all: Vec<f32> = (0..rows * self.act_dim)
+            .map(|_| self.rng.sample(StandardNormal))
+            .collect();
+        let all = Tensor::from_vec(rows, self.act_dim, all);
+        if chunks.len() == 1 {
+            return vec![Some(all)];
+        }
+        let mut b0 = 0;
+        chunks
+            .iter()
+            .map(|c| {
+                let b1 = b0 + c.part.batch;
+                let share = batch_rows(&all, b, b0, b1);
+                b0 = b1;
+                Some(share)
+            })
+            .collect()
     }
 
     /// One chunk's TD targets (`td_targets`), `noise` its share of the batch's noise.
@@ -426,29 +433,7 @@ impl Agent {
     /// chunk's loss and actor gradient come from `actor_chunk`, side by side on the rayon
     /// pool, and are summed in chunk order.
     fn train_actor(&mut self, chunks: &[Chunk]) -> Result<f64, AgentError> {
-        let eps: Vec<Option<Tensor>> = if self.has_entropy() {
-            let b: usize = chunks.iter().map(|c| c.part.batch).sum();
-            let rows: usize = chunks.iter().map(|c| c.part.obs.rows()).sum();
-            let n = rows * self.act_dim;
-            let all: Vec<f32> = (0..n).map(|_| self.rng.sample(StandardNormal)).collect();
-            let all = Tensor::from_vec(rows, self.act_dim, all);
-            if chunks.len() == 1 {
-                vec![Some(all)]
-            } else {
-                let mut b0 = 0;
-                chunks
-                    .iter()
-                    .map(|c| {
-                        let b1 = b0 + c.part.batch;
-                        let e = batch_rows(&all, b, b0, b1);
-                        b0 = b1;
-                        Some(e)
-                    })
-                    .collect()
-            }
-        } else {
-            vec![None; chunks.len()]
-        };
+        let eps = self.chunk_noise(chunks, self.has_entropy());
         let parts: Vec<_> = chunks
             .par_iter()
             .zip(eps)
