@@ -50,14 +50,18 @@ fn small_lstm() -> NetConfig {
     }
 }
 
-#[test]
-fn updates_do_not_depend_on_the_thread_count() {
-    let cases = [
+/// The networks both tests train: (name, networks, batch).
+fn cases() -> [(&'static str, NetConfig, usize); 2] {
+    [
         ("mlp", NetConfig::feed_forward(), 256),
         ("lstm", small_lstm(), 64),
-    ];
+    ]
+}
+
+#[test]
+fn updates_do_not_depend_on_the_thread_count() {
     for algo in [Algo::Sac, Algo::Td3] {
-        for (name, nets, batch) in &cases {
+        for (name, nets, batch) in &cases() {
             for chunks in [1, 3] {
                 let one = on_threads(1, algo, nets, *batch, chunks);
                 for threads in [2, 3] {
@@ -83,12 +87,8 @@ fn a_batch_split_into_chunks_learns_what_the_whole_batch_learns() {
     // first from the same weights, the later ones after steps that agree), and the first
     // Adam step, ≈ −lr·sign(g) per parameter, moves every parameter the same way, which a
     // chunk with the wrong rows, states, targets or normaliser would not.
-    let cases = [
-        ("mlp", NetConfig::feed_forward(), 256),
-        ("lstm", small_lstm(), 64),
-    ];
     for algo in [Algo::Sac, Algo::Td3] {
-        for (name, nets, batch) in &cases {
+        for (name, nets, batch) in &cases() {
             let run = |chunks, updates| {
                 bench::train_on_random_data(algo, nets, 31, 6, *batch, chunks, updates).unwrap()
             };
