@@ -31,8 +31,14 @@ fn walking_is_quick_with_the_documented_overlay() {
         assert_eq!(walking.updates_per_step, Some(0.25));
         assert_eq!(walking.max_env_steps, Some(4_000_000));
         assert_eq!(walking.best_every_steps, Some(1_000_000));
-        assert!(walking.walk.gait_clock.is_some());
+        assert_eq!(
+            walking.walk.gait_clock.as_ref().map(|c| c.chatter),
+            Some(1.0)
+        );
         assert_eq!(walking.walk.target.range, Some(0.3));
+        assert!(!walking.walk.end_at_finish);
+        assert_eq!(walking.walk.reward.forward_cap, Some(1.1));
+        assert!(walking.rl.clip_targets);
     }
 }
 
@@ -53,6 +59,7 @@ fn plain_agents_learn_at_the_same_ratio_within_the_same_steps() {
         // The step budget ends training, not the episode count.
         assert!(plain.episodes as u64 * 2400 > plain.max_env_steps.unwrap());
         assert_eq!(plain.walk, hybrid.walk);
+        assert!(plain.rl.clip_targets);
         assert_eq!(plain.network, hybrid.network);
     }
     // `quick` itself is untouched.
@@ -64,4 +71,6 @@ fn plain_agents_learn_at_the_same_ratio_within_the_same_steps() {
     .unwrap();
     assert_eq!(quick.updates_per_step, None);
     assert!(quick.walk.gait_clock.is_none());
+    assert!(quick.walk.end_at_finish && quick.walk.reward.forward_cap.is_none());
+    assert!(!quick.rl.clip_targets);
 }
