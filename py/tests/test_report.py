@@ -109,6 +109,36 @@ def test_report_from_two_evaluated_cli_runs(cli_train: Callable[..., Path],
         _check_pngs(folder, GAIT_PNGS)
 
 
+def test_eval_best_reports_the_kept_policy_of_es_runs(cli_train: Callable[..., Path],
+                                                      cli_eval: Callable[..., dict],
+                                                      tmp_path: Path) -> None:
+    import shutil
+    run = shutil.copytree(cli_train("es-sac", "--preset", "smoke", "--seed", "0"),
+                          tmp_path / "es-sac-s0")
+    last = cli_eval(run, 1)
+    kept = cli_eval(run / "best", 2)
+    # Two different policies (the last RL actor, the kept individual) evaluated differently.
+    assert kept["mean"]["gait"]["mean_forward_velocity"] != \
+        last["mean"]["gait"]["mean_forward_velocity"]
+
+    def velocity_cell(out: Path) -> float:
+        header, row = (out / "table1.csv").read_text(encoding="utf-8").splitlines()[:2]
+        return float(row.split(",")[header.split(",").index("mean_forward_velocity_mean")])
+
+    r = report.render_report([run], tmp_path / "kept", dpi=60, eval_best=True)
+    assert r.notes == ["evaluations of the kept policies (best/eval.json) of es-sac-s0; "
+                       "the others' last checkpoints (eval.json)"]
+    assert velocity_cell(tmp_path / "kept") == pytest.approx(
+        kept["mean"]["gait"]["mean_forward_velocity"], rel=1e-12)
+    report.render_report([run], tmp_path / "last", dpi=60)
+    assert velocity_cell(tmp_path / "last") == pytest.approx(
+        last["mean"]["gait"]["mean_forward_velocity"], rel=1e-12)
+    # A run without best/ (plain agents keep none) stays on eval.json.
+    one = esrl_rs.load_run(run)
+    shutil.rmtree(run / "best")
+    assert not one.use_best_eval() and one.eval_path == run / "eval.json"
+
+
 def test_gait_pictures_of_one_run(cli_train: Callable[..., Path],
                                   cli_eval: Callable[..., dict], tmp_path: Path) -> None:
     import shutil

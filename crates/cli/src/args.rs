@@ -146,6 +146,11 @@ pub struct CompareArgs {
     /// Evaluation rollouts per trained policy.
     #[arg(long, default_value_t = 1)]
     pub eval_episodes: usize,
+    /// Evaluate each ES run's kept policy, `RUN/best/` (the best individual of training, as
+    /// `esrl eval RUN/best`), instead of its last checkpoint (the last RL actor); plain runs
+    /// keep no other policy and are evaluated at their last checkpoint either way.
+    #[arg(long)]
+    pub eval_best: bool,
     /// Shared training options.
     #[command(flatten)]
     pub opts: TrainOptions,

@@ -331,14 +331,30 @@ pub fn read_curve(dir: &Path) -> Result<(Vec<f64>, Option<f64>)> {
     Ok((curve, q0_mean(&q0)))
 }
 
-/// The run's `eval.json` if it covers `episodes` episodes from seed 0 of its current
-/// checkpoint and has the gait-cycle metrics; else evaluates and writes it.
-fn evaluation(dir: &Path, episodes: usize) -> Result<EvalReport> {
-    let p = dir.join(EVAL_FILE);
+/// What `--eval-best` evaluates of a run: its kept policy `RUN/best/` when the run has one
+/// (ES runs), else the run folder (its last checkpoint).
+pub fn evaluated_policy(dir: &Path, best: bool) -> PathBuf {
+    let kept = dir.join(checkpoint::BEST);
+    if best && kept.join(checkpoint::BEST_INFO).is_file() {
+        kept
+    } else {
+        dir.to_path_buf()
+    }
+}
+
+/// The `eval.json` of `policy` (a run folder: its current checkpoint; or a run's `best/`) if
+/// it covers `episodes` episodes from seed 0 of that policy as it is now and has the
+/// gait-cycle metrics; else evaluates and writes it.
+fn evaluation(policy: &Path, episodes: usize) -> Result<EvalReport> {
+    let p = policy.join(EVAL_FILE);
     let mtime = |p: &Path| fs::metadata(p).and_then(|m| m.modified()).ok();
-    if let (Some((_, ckpt)), Ok(text)) = (esrl_eval::locate(dir).ok(), fs::read_to_string(&p)) {
+    if let (Some((_, ckpt)), Ok(text)) = (esrl_eval::locate(policy).ok(), fs::read_to_string(&p)) {
         if let Ok(r) = serde_json::from_str::<EvalReport>(&text) {
-            let fresh = match (mtime(&p), mtime(&ckpt.join("state.json"))) {
+            // A checkpoint's state.json, a kept policy's best.json: written with the weights.
+            let written = [ckpt.join("state.json"), ckpt.join(checkpoint::BEST_INFO)]
+                .into_iter()
+                .find(|f| f.is_file());
+            let fresh = match (mtime(&p), written.as_deref().and_then(mtime)) {
                 (Some(e), Some(c)) => e >= c,
                 _ => false,
             };
@@ -354,7 +370,7 @@ fn evaluation(dir: &Path, episodes: usize) -> Result<EvalReport> {
             }
         }
     }
-    let loaded = esrl_eval::load_run(dir)?;
+    let loaded = esrl_eval::load_run(policy)?;
     Ok(esrl_eval::evaluate_and_write(&loaded, 0, episodes, None)?)
 }
 
@@ -495,8 +511,9 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                 continue;
             }
             let collected = read_curve(&p.dir).and_then(|(curve, q0)| {
-                let report = evaluation(&p.dir, args.eval_episodes)
-                    .with_context(|| format!("evaluating {}", p.dir.display()))?;
+                let policy = evaluated_policy(&p.dir, args.eval_best);
+                let report = evaluation(&policy, args.eval_episodes)
+                    .with_context(|| format!("evaluating {}", policy.display()))?;
                 Ok((curve, q0, report))
             });
             match collected {
@@ -570,6 +587,13 @@ pub fn run(args: &CompareArgs) -> Result<()> {
              within 1° of a limit.\n",
             args.eval_episodes
         ));
+        md.push_str(if args.eval_best {
+            "Evaluated policies: each ES run's kept policy (`RUN/best/`, the best individual of \
+             training; `RUN/best/eval.json`), each plain run's last policy (`RUN/eval.json`).\n"
+        } else {
+            "Evaluated policies: each run's last checkpoint (`RUN/eval.json`; for ES runs the \
+             last RL actor, not the kept `RUN/best/`).\n"
+        });
         if let Some(note) = &budget_note {
             md.push_str(&format!("\n{note}\n"));
         }

@@ -3,7 +3,10 @@
 //! the mean over seeds of the nAUC recomputed here from each run's metrics.jsonl, and a
 //! budget table with each run's length and environment steps from its summary.json; a second
 //! invocation reuses the finished runs (no file of theirs is rewritten) and writes the same
-//! table; unknown agent names fail with the list of valid ones.
+//! table; unknown agent names fail with the list of valid ones. With `--eval-best` the ES
+//! rows come from each ES run's kept policy (`RUN/best/eval.json`, the same numbers as `esrl
+//! eval RUN/best`), the plain rows from the last checkpoint as before, and a repeat
+//! re-evaluates nothing.
 
 mod common;
 
@@ -116,6 +119,85 @@ fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
         "finished runs and their evaluations are untouched"
     );
     assert_eq!(String::from_utf8_lossy(&second.stdout), stdout);
+    assert_eq!(std::fs::read_to_string(dir.join("table.csv")).unwrap(), csv);
+}
+
+/// Column `name` of the agent's row of a table.csv.
+fn csv_cell(csv: &str, agent: &str, name: &str) -> String {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == name).unwrap();
+    let row = lines
+        .find(|l| l.split(',').next() == Some(agent))
+        .unwrap_or_else(|| panic!("no row {agent} in\n{csv}"));
+    row.split(',').nth(col).unwrap().to_string()
+}
+
+#[test]
+fn eval_best_tabulates_the_kept_policies_of_es_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("cmp");
+    let d = dir.to_str().unwrap();
+    let args = [
+        "compare",
+        "--agents",
+        "es-sac,sac",
+        "--seeds",
+        "2",
+        "--preset",
+        "smoke",
+        "--out",
+        d,
+        "--no-progress",
+        "--jobs",
+        "2",
+        "--eval-episodes",
+        "2",
+        "--eval-best",
+    ];
+    ok(&args);
+    let md = std::fs::read_to_string(dir.join("table.md")).unwrap();
+    assert!(
+        md.contains("each ES run's kept policy (`RUN/best/`"),
+        "{md}"
+    );
+    let csv = std::fs::read_to_string(dir.join("table.csv")).unwrap();
+    // Each evaluated policy's mean, as `esrl eval` would write it.
+    let mean_velocity = |report: &Path| {
+        let r = read_json(report);
+        assert_eq!(r["episodes"].as_array().unwrap().len(), 2);
+        r["mean"]["gait"]["mean_forward_velocity"].as_f64().unwrap()
+    };
+    for (agent, file) in [("es-sac", "best/eval.json"), ("sac", "eval.json")] {
+        let want = (mean_velocity(&dir.join(format!("{agent}-s0")).join(file))
+            + mean_velocity(&dir.join(format!("{agent}-s1")).join(file)))
+            / 2.0;
+        let got: f64 = csv_cell(&csv, agent, "mean_forward_velocity_mean")
+            .parse()
+            .unwrap();
+        assert!(
+            (got - want).abs() < 1e-9 * (1.0 + want.abs()),
+            "{agent}: {got} vs {want}"
+        );
+    }
+    // The ES runs' last checkpoints were not evaluated, plain runs keep no best/.
+    for run in ["es-sac-s0", "es-sac-s1"] {
+        assert!(!dir.join(run).join("eval.json").exists(), "{run}");
+    }
+    assert!(!dir.join("sac-s0/best").exists());
+    // `esrl eval RUN/best` gives the same report.
+    let best = dir.join("es-sac-s0/best");
+    let tabulated = read_json(&best.join("eval.json"));
+    ok(&["eval", best.to_str().unwrap(), "--episodes", "2"]);
+    assert_eq!(
+        read_json(&best.join("eval.json"))["mean"],
+        tabulated["mean"]
+    );
+    // A repeat reuses every evaluation.
+    let stamp = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).unwrap();
+    let before = stamp(&best.join("eval.json"));
+    ok(&args);
+    assert_eq!(stamp(&best.join("eval.json")), before);
     assert_eq!(std::fs::read_to_string(dir.join("table.csv")).unwrap(), csv);
 }
 

@@ -275,6 +275,8 @@ fn swap_in(tmp: &Path, current: &Path, old: &Path) -> Result<()> {
 
 /// Where a run's best policy so far is kept (see [`save_best`]).
 pub const BEST: &str = "best";
+/// The file in `RUN/best/` that says which policy it holds ([`BestInfo`]).
+pub const BEST_INFO: &str = "best.json";
 
 /// What `RUN/best/best.json` says about the policy in `RUN/best/`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -296,7 +298,7 @@ pub struct BestInfo {
 pub fn save_best(run: &Path, agent: &Agent, info: &BestInfo) -> Result<()> {
     let tmp = fresh_dir(&run.join("best.tmp"))?;
     write_agent(&tmp, agent.state_tensors(), agent)?;
-    write_json_atomic(&tmp.join("best.json"), info)?;
+    write_json_atomic(&tmp.join(BEST_INFO), info)?;
     swap_in(&tmp, &run.join(BEST), &run.join("best.old"))
 }
 

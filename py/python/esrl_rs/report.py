@@ -331,7 +331,7 @@ def config_differences(runs: Sequence[Run]) -> Tuple[List[str], List[str]]:
 def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
                   out: Union[str, "os.PathLike[str]"], dpi: int = 150, gait: bool = True,
                   episode: int = 0, gif: bool = False, start: float = 0.0,
-                  mixed: bool = False) -> Report:
+                  mixed: bool = False, eval_best: bool = False) -> Report:
     """Renders Fig. 5 (a–d) and Table 1 for ``run_dirs`` into ``out`` (created if needed),
     and with ``gait`` the gait pictures (:func:`render_gait`) of episode ``episode`` of every
     run whose ``eval.json`` has the per-step trace into ``out/gait/<agent>-s<seed>/``. Raises
@@ -341,7 +341,11 @@ def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
     The runs of one agent are pooled as seeds of one experiment, so their configurations
     must agree but for the seed, the threads and the budget: otherwise ``ValueError`` lists
     the differences, unless ``mixed`` (then they are pooled and the differences noted).
-    Budget differences and unfinished runs are noted in ``Report.notes`` and ``table1.md``."""
+    Budget differences and unfinished runs are noted in ``Report.notes`` and ``table1.md``.
+
+    With ``eval_best`` the gait columns, Fig. 5c/d and the gait pictures of ES runs come from
+    their kept policy, ``RUN/best/eval.json`` (as ``esrl compare --eval-best`` tabulates them);
+    plain runs keep no other policy and use ``RUN/eval.json``."""
     from matplotlib.figure import Figure  # no pyplot: no GUI backend, no global state
 
     if not run_dirs:
@@ -349,6 +353,11 @@ def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
     runs = [load_run(p) for p in run_dirs]
     groups = _ordered(group_by_agent(runs))
     notes: List[str] = []
+    if eval_best:
+        kept = [r.path.name for r in runs if r.use_best_eval()]
+        notes.append("evaluations of the kept policies (best/eval.json) of "
+                     + (", ".join(kept) if kept else "no run")
+                     + "; the others' last checkpoints (eval.json)")
     for agent, members in groups.items():
         settings, budget = config_differences(members)
         if settings and not mixed:
@@ -466,6 +475,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="also an animated side view, stick.gif (first 10 s)")
     parser.add_argument("--start", type=float, default=0.0, metavar="S",
                         help="gait pictures from this time (s) of the episode (default 0)")
+    parser.add_argument("--eval-best", action="store_true",
+                        help="take ES runs' evaluations from their kept policy, "
+                             "RUN/best/eval.json (`esrl compare --eval-best`), instead of "
+                             "RUN/eval.json")
     parser.add_argument("--mixed", action="store_true",
                         help="pool runs of one agent even when their configurations differ "
                              "(by default that is refused, listing the differences)")
@@ -475,7 +488,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         if args.runs:
             report = render_report(args.runs, args.out, dpi=args.dpi, episode=args.episode,
-                                   gif=args.gif, start=args.start, mixed=args.mixed)
+                                   gif=args.gif, start=args.start, mixed=args.mixed,
+                                   eval_best=args.eval_best)
         else:
             report = Report(out=Path(args.out))
         for path in args.gait:

@@ -27,6 +27,9 @@ class Run:
             ``float64`` with NaN for null/missing; non-numeric columns are lists.
         columns: the column names in file order.
         summary: ``summary.json`` as a dict (empty if the run has not written it yet).
+        eval_path: the evaluation report :attr:`eval` reads: ``eval.json`` (``esrl eval
+            RUN``, the last checkpoint) unless :meth:`use_best_eval` chose
+            ``best/eval.json`` (``esrl eval RUN/best``, an ES run's kept policy).
     """
 
     def __init__(self, data: Dict[str, Any]) -> None:
@@ -38,6 +41,7 @@ class Run:
         self.metrics_file: Path = Path(data["metrics_file"])
         self._rows: int = int(data["rows"])
         self._eval: Optional[Dict[str, Any]] = None
+        self.eval_path: Path = self.path / "eval.json"
 
     def __len__(self) -> int:
         return self._rows
@@ -88,16 +92,28 @@ class Run:
 
     @property
     def has_eval(self) -> bool:
-        """Whether the folder holds an ``eval.json``."""
-        return (self.path / "eval.json").is_file()
+        """Whether the evaluation report :attr:`eval_path` exists."""
+        return self.eval_path.is_file()
 
     @property
     def eval(self) -> Optional[Dict[str, Any]]:
-        """``eval.json`` (see :func:`esrl_rs.load_eval`), or ``None`` if the run was not
-        evaluated. Loaded on first use."""
+        """The evaluation report at :attr:`eval_path` (see :func:`esrl_rs.load_eval`), or
+        ``None`` if there is none. Loaded on first use."""
         if self._eval is None and self.has_eval:
-            self._eval = _native.load_eval(str(self.path / "eval.json"))
+            self._eval = _native.load_eval(str(self.eval_path))
         return self._eval
+
+    def use_best_eval(self) -> bool:
+        """Reads the evaluation of the run's kept policy, ``best/eval.json`` (``esrl eval
+        RUN/best``; ``esrl compare --eval-best``), from now on, if the run keeps one (ES runs
+        do; plain runs keep no other policy and stay on ``eval.json``). Returns whether it
+        switched."""
+        best = self.path / "best"
+        if not (best / "best.json").is_file():
+            return False
+        self.eval_path = best / "eval.json"
+        self._eval = None
+        return True
 
     def to_pandas(self) -> Any:
         """The metrics as a ``pandas.DataFrame`` (needs pandas)."""
