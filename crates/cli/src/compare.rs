@@ -197,7 +197,7 @@ fn ensure_trained(plan: &Plan, progress: bool, label: &str) -> Result<bool> {
         if progress {
             crate::train::Display::Bar
         } else {
-            crate::train::Display::Quiet
+            crate::train::Display::Runs
         },
     )
     .with_context(|| format!("training {}", plan.dir.display()))?;

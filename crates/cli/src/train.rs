@@ -20,9 +20,21 @@ pub enum Display {
     /// Log lines every 10 s (`--no-progress`), flushed as they go, so a redirected log
     /// follows the run.
     Log,
-    /// Nothing but errors (runs trained side by side by `esrl compare`).
-    Quiet,
+    /// One line per minute (and one after the first row), prefixed with the run folder's
+    /// name, and nothing else: runs trained side by side by `esrl compare`, whose own lines
+    /// say when each starts and finishes.
+    Runs,
 }
+
+impl Display {
+    /// Whether the banner, the pace estimate and the closing line are printed.
+    fn verbose(self) -> bool {
+        matches!(self, Display::Bar | Display::Log)
+    }
+}
+
+/// How often `Display::Runs` prints a run's line, s.
+const RUNS_LINE_EVERY_S: f64 = 60.0;
 
 /// Runs `esrl train`. Returns the run folder, and whether the budget was completed (false
 /// after a stop signal).
@@ -151,7 +163,7 @@ impl LearnerVisitor for Drive<'_> {
             env_steps,
         } = &opening
         {
-            if display != Display::Quiet {
+            if display.verbose() {
                 eprintln!(
                     "resuming {} from {} ({rows} rows, {env_steps} env steps)",
                     root.display(),
@@ -159,7 +171,7 @@ impl LearnerVisitor for Drive<'_> {
                 );
             }
         }
-        if display != Display::Quiet {
+        if display.verbose() {
             eprintln!("{}", banner(cfg, root, resume));
         }
         signals::install();
@@ -167,7 +179,7 @@ impl LearnerVisitor for Drive<'_> {
         let total = training.total();
         let unit = L::UNIT;
         let bar = progress_bar(total, training.rows(), display);
-        let log = display != Display::Quiet && bar.is_hidden();
+        let log = display.verbose() && bar.is_hidden();
         let mut last_log = Instant::now();
         let started = Instant::now();
         let rows_at_start = training.rows();
@@ -193,7 +205,7 @@ impl LearnerVisitor for Drive<'_> {
             bar.set_message(format!("{} | best so far {:.1}", row.summary, row.best));
             let elapsed = started.elapsed().as_secs_f64();
             let measured = row.rows - rows_at_start;
-            if !eta_told && display != Display::Quiet && (measured >= 3 || elapsed > 30.0) {
+            if !eta_told && display.verbose() && (measured >= 3 || elapsed > 30.0) {
                 eta_told = true;
                 let left = total.saturating_sub(row.rows);
                 let pace = elapsed / measured as f64;
@@ -227,6 +239,24 @@ impl LearnerVisitor for Drive<'_> {
                     bar.println(text);
                 }
             }
+            if display == Display::Runs
+                && (measured == 1 || last_log.elapsed().as_secs_f64() > RUNS_LINE_EVERY_S)
+            {
+                let name = root.file_name().map_or_else(
+                    || root.display().to_string(),
+                    |n| n.to_string_lossy().into_owned(),
+                );
+                let steps = training.learner().env_steps();
+                let budget = cfg.max_env_steps.map_or(String::new(), |b| format!("/{b}"));
+                eprintln!(
+                    "[{name}] {}/{total} {unit}s, {steps}{budget} env steps | best so far {:.1} \
+                     | {}",
+                    row.rows,
+                    row.best,
+                    human_duration(training.wall_s())
+                );
+                last_log = Instant::now();
+            }
             if log && last_log.elapsed().as_secs_f64() > 10.0 {
                 let steps = match cfg.max_env_steps {
                     Some(b) => format!(" | {}/{b} env steps", training.learner().env_steps()),
@@ -245,7 +275,7 @@ impl LearnerVisitor for Drive<'_> {
         }
         bar.finish_and_clear();
         training.finish(finished)?;
-        if display != Display::Quiet {
+        if display.verbose() {
             if finished {
                 eprintln!(
                     "done: {} rows, {} env steps, {} → {}",

@@ -3,7 +3,8 @@
 //! the mean over seeds of the nAUC recomputed here from each run's metrics.jsonl, and a
 //! budget table with each run's length and environment steps from its summary.json; a second
 //! invocation reuses the finished runs (no file of theirs is rewritten) and writes the same
-//! table; unknown agent names fail with the list of valid ones. With `--eval-best` the ES
+//! table; while training, each run logs lines prefixed with its name; unknown agent names
+//! fail with the list of valid ones. With `--eval-best` the ES
 //! rows come from each ES run's kept policy (`RUN/best/eval.json`, the same numbers as `esrl
 //! eval RUN/best`), the plain rows from the last checkpoint as before, and a repeat
 //! re-evaluates nothing.
@@ -59,6 +60,23 @@ fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
     ];
     let first = ok(&args);
     let stdout = String::from_utf8_lossy(&first.stdout).to_string();
+    // Runs trained side by side report themselves by name, from their first row on.
+    let log = String::from_utf8_lossy(&first.stderr);
+    for (run, unit) in [
+        ("es-sac-s0", "generations"),
+        ("es-sac-s1", "generations"),
+        ("sac-s0", "episodes"),
+        ("sac-s1", "episodes"),
+    ] {
+        let line = log
+            .lines()
+            .find(|l| l.starts_with(&format!("[{run}] 1/")))
+            .unwrap_or_else(|| panic!("no first-row line of {run} in:\n{log}"));
+        assert!(
+            line.contains(&format!(" {unit}, ")) && line.contains("env steps | best so far"),
+            "{line}"
+        );
+    }
     assert!(stdout.contains("| es-sac | 2 |"), "{stdout}");
     assert!(stdout.contains("| sac | 2 |"), "{stdout}");
 
