@@ -31,8 +31,8 @@
 //! steps) matters because falls end most early episodes: the estimate is an upper bound that
 //! ES runs never spend.
 //!
-//! Ctrl-C stops every training at its next generation/episode boundary with a checkpoint; run
-//! the same command again to resume them.
+//! Ctrl-C stops every training at its next generation/episode boundary with a checkpoint,
+//! starts no other run and writes no table; run the same command again to resume them.
 
 use crate::args::{AgentKind, CompareArgs};
 use anyhow::{bail, Context, Result};
@@ -230,6 +230,10 @@ fn train_all(plans: &[Plan], jobs: usize, progress: bool) -> Vec<Result<()>> {
     std::thread::scope(|s| {
         for _ in 0..jobs.min(plans.len()) {
             s.spawn(|| loop {
+                // After a stop signal the runs in progress checkpoint; none starts.
+                if crate::signals::requested().is_some() {
+                    break;
+                }
                 let next = queue.lock().map(|mut q| q.pop_front()).unwrap_or(None);
                 let Some(i) = next else { break };
                 let plan = &plans[i];
@@ -252,7 +256,13 @@ fn train_all(plans: &[Plan], jobs: usize, progress: bool) -> Vec<Result<()>> {
         .into_inner()
         .unwrap_or_default()
         .into_iter()
-        .map(|r| r.unwrap_or_else(|| Err(anyhow::anyhow!("not trained"))))
+        .map(|r| {
+            r.unwrap_or_else(|| {
+                Err(anyhow::anyhow!(
+                    "not started (stopped by a signal); the same command trains it"
+                ))
+            })
+        })
         .collect()
 }
 
@@ -498,6 +508,14 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                 failures.push(format!("{}: {e:#}", p.name()));
             }
         }
+    }
+
+    if crate::signals::requested().is_some() {
+        bail!(
+            "stopped by a signal before every run finished:\n  {}\nthe same command resumes \
+             the comparison",
+            failures.join("\n  ")
+        );
     }
 
     // Evaluate every finished run and collect its table entries.

@@ -1,7 +1,8 @@
 //! Contract: SIGTERM and SIGINT stop a training like a finished generation: the signal is
 //! acknowledged at once, a checkpoint is written, the command exits with 128 + the signal
 //! (143, 130), and `--resume` then produces exactly the rows and weights of an uninterrupted
-//! run.
+//! run. A stopped `esrl compare` starts no queued run and writes no table; the same command
+//! resumes it exactly.
 #![cfg(unix)]
 
 mod common;
@@ -96,4 +97,80 @@ fn sigterm_checkpoints_exits_143_and_resumes_exactly() {
 #[test]
 fn sigint_checkpoints_exits_130_and_resumes_exactly() {
     stop_and_resume("-INT", 130);
+}
+
+/// `esrl compare` stopped by SIGTERM while its first run trains: that run checkpoints, no
+/// queued run starts, no table is written, the exit status is 143; the same command then
+/// resumes and finishes, its runs identical to runs trained without a stop.
+#[test]
+fn a_stopped_comparison_starts_no_other_run_and_resumes_exactly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (split, straight) = (tmp.path().join("split"), tmp.path().join("straight"));
+    let args = |dir: &Path| {
+        vec![
+            "compare".to_string(),
+            "--agents".into(),
+            "es-td3,sac,td3".into(),
+            "--seeds".into(),
+            "1".into(),
+            "--preset".into(),
+            "smoke".into(),
+            "--generations".into(),
+            "60".into(),
+            "--jobs".into(),
+            "1".into(),
+            "--threads".into(),
+            "1".into(),
+            "--no-progress".into(),
+            "--out".into(),
+            dir.to_str().unwrap().into(),
+        ]
+    };
+    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
+        .args(args(&split))
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let first = split.join("es-td3-s0");
+    let started = Instant::now();
+    while row_count(&first) < 3 {
+        assert!(started.elapsed() < Duration::from_secs(120), "no rows");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let sent = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let exit = child.wait().unwrap();
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    assert_eq!(exit.code(), Some(143), "{stderr}");
+    assert!(row_count(&first) < 60, "stopped early: {stderr}");
+    assert!(first.join("checkpoint/state.json").is_file());
+    for queued in ["sac-s0", "td3-s0"] {
+        assert!(!split.join(queued).exists(), "{queued} started: {stderr}");
+        assert!(
+            stderr.contains(&format!("{queued}: not started")),
+            "{stderr}"
+        );
+    }
+    assert!(!split.join("table.md").exists(), "{stderr}");
+
+    let resume = args(&split);
+    ok(&resume.iter().map(String::as_str).collect::<Vec<_>>());
+    let whole = args(&straight);
+    ok(&whole.iter().map(String::as_str).collect::<Vec<_>>());
+    for run in ["es-td3-s0", "sac-s0", "td3-s0"] {
+        assert_eq!(rows(&straight.join(run)), rows(&split.join(run)), "{run}");
+    }
+    assert_eq!(
+        std::fs::read_to_string(straight.join("table.csv")).unwrap(),
+        std::fs::read_to_string(split.join("table.csv")).unwrap()
+    );
 }
