@@ -343,7 +343,7 @@ pub fn read_curve(dir: &Path) -> Result<(Vec<f64>, Option<f64>)> {
 
 /// What `--eval-best` evaluates of a run: its kept policy `RUN/best/` when the run has one
 /// (ES runs), else the run folder (its last checkpoint).
-pub fn evaluated_policy(dir: &Path, best: bool) -> PathBuf {
+fn evaluated_policy(dir: &Path, best: bool) -> PathBuf {
     let kept = dir.join(checkpoint::BEST);
     if best && kept.join(checkpoint::BEST_INFO).is_file() {
         kept

@@ -39,12 +39,10 @@ fn mtimes(dir: &Path) -> Vec<(String, SystemTime)> {
     out
 }
 
-#[test]
-fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
-    let tmp = tempfile::tempdir().unwrap();
-    let dir = tmp.path().join("cmp");
-    let d = dir.to_str().unwrap();
-    let args = [
+/// `esrl compare` of ES-SAC and SAC, 2 seeds each, on `smoke` into `out`, two at a time,
+/// then `extra`.
+fn smoke_compare<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
         "compare",
         "--agents",
         "es-sac,sac",
@@ -53,11 +51,21 @@ fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
         "--preset",
         "smoke",
         "--out",
-        d,
+        out,
         "--no-progress",
         "--jobs",
         "2",
     ];
+    args.extend_from_slice(extra);
+    args
+}
+
+#[test]
+fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("cmp");
+    let d = dir.to_str().unwrap();
+    let args = smoke_compare(d, &[]);
     let first = ok(&args);
     let stdout = String::from_utf8_lossy(&first.stdout).to_string();
     // Runs trained side by side report themselves by name, from their first row on.
@@ -156,23 +164,7 @@ fn eval_best_tabulates_the_kept_policies_of_es_runs() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("cmp");
     let d = dir.to_str().unwrap();
-    let args = [
-        "compare",
-        "--agents",
-        "es-sac,sac",
-        "--seeds",
-        "2",
-        "--preset",
-        "smoke",
-        "--out",
-        d,
-        "--no-progress",
-        "--jobs",
-        "2",
-        "--eval-episodes",
-        "2",
-        "--eval-best",
-    ];
+    let args = smoke_compare(d, &["--eval-episodes", "2", "--eval-best"]);
     ok(&args);
     let md = std::fs::read_to_string(dir.join("table.md")).unwrap();
     assert!(

@@ -19,6 +19,35 @@ fn row_count(dir: &Path) -> usize {
         .unwrap_or(0)
 }
 
+/// Starts `esrl ARGS`, sends `signal` once `watched` has 3 rows, and returns the exit status
+/// and stderr.
+fn stop_after_three_rows(args: &[String], watched: &Path, signal: &str) -> (Option<i32>, String) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
+        .args(args)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    while row_count(watched) < 3 {
+        assert!(started.elapsed() < Duration::from_secs(120), "no rows");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let sent = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let exit = child.wait().unwrap();
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    (exit.code(), stderr)
+}
+
 fn stop_and_resume(signal: &str, status: i32) {
     let tmp = tempfile::tempdir().unwrap();
     let (straight, split) = (tmp.path().join("straight"), tmp.path().join("split"));
@@ -38,30 +67,8 @@ fn stop_and_resume(signal: &str, status: i32) {
             dir.to_str().unwrap().into(),
         ]
     };
-    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args(&split))
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let started = Instant::now();
-    while row_count(&split) < 3 {
-        assert!(started.elapsed() < Duration::from_secs(120), "no rows");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let sent = Command::new("kill")
-        .args([signal, &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(sent.success());
-    let exit = child.wait().unwrap();
-    let mut stderr = String::new();
-    child
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut stderr)
-        .unwrap();
-    assert_eq!(exit.code(), Some(status), "{signal}: {stderr}");
+    let (exit, stderr) = stop_after_three_rows(&args(&split), &split, signal);
+    assert_eq!(exit, Some(status), "{signal}: {stderr}");
     assert!(
         stderr.contains("received: finishing the current"),
         "{stderr}"
@@ -126,31 +133,9 @@ fn a_stopped_comparison_starts_no_other_run_and_resumes_exactly() {
             dir.to_str().unwrap().into(),
         ]
     };
-    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args(&split))
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
     let first = split.join("es-td3-s0");
-    let started = Instant::now();
-    while row_count(&first) < 3 {
-        assert!(started.elapsed() < Duration::from_secs(120), "no rows");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let sent = Command::new("kill")
-        .args(["-TERM", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(sent.success());
-    let exit = child.wait().unwrap();
-    let mut stderr = String::new();
-    child
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut stderr)
-        .unwrap();
-    assert_eq!(exit.code(), Some(143), "{stderr}");
+    let (exit, stderr) = stop_after_three_rows(&args(&split), &first, "-TERM");
+    assert_eq!(exit, Some(143), "{stderr}");
     assert!(row_count(&first) < 60, "stopped early: {stderr}");
     assert!(first.join("checkpoint/state.json").is_file());
     for queued in ["sac-s0", "td3-s0"] {
