@@ -29,9 +29,9 @@
 //! ```
 //!
 //! Threads: an update runs on the rayon pool it is called in; the critics (and the target
-//! critics) train side by side, and large products split by output rows, so the result is
-//! the same at any pool size. The actor's loss, through both critics, is one graph on the
-//! calling thread.
+//! critics) train side by side, the actor's pass at s runs beside the TD targets and the
+//! target critics' Polyak step beside the actor loss, and large products split by output
+//! rows, so the result is the same at any pool size.
 //!
 //! Limitations: the burn-in runs
 //! one step at a time without gradients; recurrent state is not stored in the buffer (burn-in

@@ -19,7 +19,7 @@
 
 use crate::agent::{Agent, AgentError, Smoothing, UpdateStats};
 use crate::replay::SequenceBatch;
-use esrl_nn::{Critic, Graph, LstmState, Module, Tensor};
+use esrl_nn::{Actor, Adam, Critic, Graph, LstmState, Module, Tensor, Var};
 use rand::Rng;
 use rand_distr::StandardNormal;
 use rayon::prelude::*;
@@ -178,16 +178,46 @@ fn smooth(a: &mut Tensor, s: Smoothing, eps: &[f32]) {
 
 impl Agent {
     /// One gradient update on `batch`: critics; actor, α and targets when due.
+    ///
+    /// The steps overlap where one does not read what another writes, which changes no
+    /// number: the actor's pass at s (the actor loss's first half) reads only the actor, so
+    /// it runs beside the TD targets; the target critics' Polyak step reads only the stepped
+    /// critics, so it runs beside the actor loss. The noise of both halves is drawn first, in
+    /// the order the steps use it (a′ at s′, then ã at s).
     pub fn update(&mut self, batch: &SequenceBatch) -> Result<UpdateStats, AgentError> {
         let part = self.trained_part(batch);
         let st = self.burn_in(batch);
         let mut chunks = Chunk::split(part, st, self.cfg.batch_chunks);
-        self.td_targets(&mut chunks);
-        let (critic_loss, q_mean) = self.train_critics(&chunks)?;
+        let actor_due = self.updates % self.rules.policy_delay == 0;
+        let td_noise = self.chunk_noise(&chunks, self.draws_target_noise());
+        let actor_noise = actor_due.then(|| self.chunk_noise(&chunks, self.has_entropy()));
+        let actor = &self.actor;
+        let (ys, passes) = rayon::join(
+            || self.td_targets(&chunks, td_noise),
+            || actor_noise.map(|noise| actor_passes(actor, &chunks, noise)),
+        );
+        for (c, y) in chunks.iter_mut().zip(ys) {
+            c.y = y;
+        }
+        let (critic_loss, q_mean) = Self::train_critics(
+            &mut self.critics,
+            &mut self.opt_critics,
+            &chunks,
+            self.updates,
+        )?;
         let mut actor_loss = None;
-        if self.updates % self.rules.policy_delay == 0 {
-            actor_loss = Some(self.train_actor(&chunks)?);
-            self.update_targets()?;
+        if let Some(passes) = passes {
+            let tau = self.cfg.tau as f32;
+            let (critics, actor) = (&self.critics, &self.actor);
+            let (parts, targets) = rayon::join(
+                || actor_losses(critics, actor, &chunks, passes),
+                || polyak(&mut self.critic_targets, critics, tau),
+            );
+            actor_loss = Some(self.step_actor(parts, &chunks)?);
+            targets?;
+            if let Some(t) = &mut self.actor_target {
+                t.params_mut().polyak_update(self.actor.params(), tau)?;
+            }
         }
         self.updates += 1;
         Ok(UpdateStats {
@@ -230,22 +260,22 @@ impl Agent {
     ///
     /// with a′ ~ π(·|s′) for SAC; for TD3/DDPG a′ = μ̄(s′) from the target actor, smoothed
     /// to clip(a′ + clip(ε, −c, c), −1, 1) when `target_noise` > 0, and no entropy term.
-    /// The noise (SAC's ε, TD3's smoothing ε) is drawn for the whole batch first, in the
-    /// order one pass over the batch draws it, and split like the batch; the chunks then run
-    /// side by side on the rayon pool.
-    fn td_targets(&mut self, chunks: &mut [Chunk]) {
-        let draw = match &self.actor_target {
-            None => true,
-            Some(_) => self.rules.smoothing.is_some(),
-        };
-        let noise = self.chunk_noise(chunks, draw);
-        let ys: Vec<Tensor> = chunks
+    /// `noise` (SAC's ε, TD3's smoothing ε; [`Self::draws_target_noise`]) is drawn for the
+    /// whole batch, in the order one pass over the batch draws it, and split like the batch
+    /// ([`Self::chunk_noise`]); the chunks run side by side on the rayon pool.
+    fn td_targets(&self, chunks: &[Chunk], noise: Vec<Option<Tensor>>) -> Vec<Tensor> {
+        chunks
             .par_iter()
             .zip(noise)
             .map(|(c, n)| self.td_target(c, n))
-            .collect();
-        for (c, y) in chunks.iter_mut().zip(ys) {
-            c.y = y;
+            .collect()
+    }
+
+    /// Whether the TD target draws noise: SAC's a′ ~ π(·|s′), TD3's target smoothing.
+    fn draws_target_noise(&self) -> bool {
+        match &self.actor_target {
+            None => true,
+            Some(_) => self.rules.smoothing.is_some(),
         }
     }
 
@@ -348,7 +378,12 @@ impl Agent {
     /// (critic, chunk) pair is its own graph, all side by side on the rayon pool; a critic's
     /// gradient is its chunks' summed in chunk order (one chunk: the same numbers as one
     /// graph of the critics' sum).
-    fn train_critics(&mut self, chunks: &[Chunk]) -> Result<(f64, f64), AgentError> {
+    fn train_critics(
+        critics: &mut [Critic],
+        opts: &mut [Adam],
+        chunks: &[Chunk],
+        updates: u64,
+    ) -> Result<(f64, f64), AgentError> {
         let one = |c: &Critic, ch: &Chunk, state: &Option<LstmState>| {
             let p = &ch.part;
             let mut g = Graph::new();
@@ -382,17 +417,17 @@ impl Agent {
             (grad, lv, q_sum)
         };
         let n = chunks.len();
-        let mut pairs: Vec<_> = (0..self.critics.len() * n)
+        let mut pairs: Vec<_> = (0..critics.len() * n)
             .into_par_iter()
             .map(|i| {
                 let (k, ch) = (i / n, &chunks[i % n]);
-                one(&self.critics[k], ch, &ch.critics[k])
+                one(&critics[k], ch, &ch.critics[k])
             })
             .collect();
         // Per critic, its chunks in order: the summed gradient and loss (and Q₁'s mean).
-        let mut per_critic = Vec::with_capacity(self.critics.len());
+        let mut per_critic = Vec::with_capacity(critics.len());
         let mut q_mean = 0.0;
-        for k in 0..self.critics.len() {
+        for k in 0..critics.len() {
             let mut grads = Vec::with_capacity(n);
             let (mut loss, mut q_sum) = (None, None);
             for (grad, lv, qs) in pairs.drain(..n) {
@@ -413,12 +448,12 @@ impl Agent {
         if !loss.is_finite() {
             return Err(AgentError::NonFinite {
                 what: "critic loss",
-                update: self.updates,
+                update: updates,
             });
         }
-        self.critics
+        critics
             .par_iter_mut()
-            .zip(&mut self.opt_critics)
+            .zip(opts)
             .zip(&mut per_critic)
             .try_for_each(|((c, opt), (grad, _))| opt.step(c.params_mut(), grad).map(drop))?;
         Ok((f64::from(loss), f64::from(q_mean)))
@@ -428,17 +463,9 @@ impl Agent {
     /// - SAC (eq. 5): L(π) = 1/M Σ m·(α log π(ã|s) − minₖ Qₖ(s, ã)), ã ~ π(·|s) re-sampled;
     /// - TD3/DDPG: L(μ) = −1/M Σ m·Q₁(s, μ(s)).
     ///
-    /// Then α's step (SAC). SAC's ε is drawn for the whole batch first, in the order one
-    /// [`esrl_nn::Actor::sample`] over the batch draws it, and split like the batch; each
-    /// chunk's loss and actor gradient come from `actor_chunk`, side by side on the rayon
-    /// pool, and are summed in chunk order.
-    fn train_actor(&mut self, chunks: &[Chunk]) -> Result<f64, AgentError> {
-        let eps = self.chunk_noise(chunks, self.has_entropy());
-        let parts: Vec<_> = chunks
-            .par_iter()
-            .zip(eps)
-            .map(|(ch, eps)| self.actor_chunk(ch, eps))
-            .collect();
+    /// Then α's step (SAC). `parts` are the chunks' losses, actor gradients and log π
+    /// ([`actor_losses`]), summed here in chunk order.
+    fn step_actor(&mut self, parts: Vec<ActorPart>, chunks: &[Chunk]) -> Result<f64, AgentError> {
         let mut grads = Vec::with_capacity(parts.len());
         let mut loss: Option<f32> = None;
         let mut log_probs = Vec::with_capacity(parts.len());
@@ -460,134 +487,6 @@ impl Agent {
             self.train_alpha(&log_probs, chunks)?;
         }
         Ok(f64::from(loss))
-    }
-
-    /// One chunk's share of the actor loss: the actor's gradient, the loss and (SAC) log π of
-    /// the samples drawn with `eps`. The graph is cut at the action so the critics run side
-    /// by side on the rayon pool: the actor's graph gives ã (and log π); each critic's own
-    /// graph gives Qₖ(s, ã) with ã as a leaf; a small graph gives the loss, its value and its
-    /// gradients with respect to min Qₖ and log π; the minimum's derivative goes to the
-    /// critic it chose (ties to the first, as [`Graph::minimum`]); each critic's graph turns
-    /// it into ∂L/∂ã; their sum, last critic first as one graph's reverse pass would add
-    /// them, and ∂L/∂log π seed the actor's reverse pass. The same numbers as one graph of
-    /// the whole loss.
-    #[allow(clippy::type_complexity)]
-    fn actor_chunk(
-        &self,
-        ch: &Chunk,
-        eps: Option<Tensor>,
-    ) -> (Result<Vec<f32>, esrl_nn::NnError>, f32, Option<Tensor>) {
-        let p = &ch.part;
-        let batch = p.batch.max(1);
-        // SAC takes the minimum of its critics; TD3 and DDPG follow Q₁.
-        let used = if eps.is_some() { self.critics.len() } else { 1 };
-        let mut ga = Graph::new();
-        let ov = ga.constant(p.obs.clone());
-        let out = self.actor.forward(&mut ga, ov, batch, ch.actor.as_ref());
-        let (act, log_prob) = match eps {
-            Some(eps) => {
-                let s = self.actor.sample_with_noise(&mut ga, &out, eps);
-                (s.action, Some(s.log_prob))
-            }
-            None => (self.actor.deterministic(&mut ga, &out), None),
-        };
-        let action = ga.value(act).clone();
-
-        // Each critic on its own graph: Qₖ(s, ã) with ã a leaf.
-        let mut critic_graphs: Vec<_> = self.critics[..used]
-            .par_iter()
-            .zip(&ch.critics)
-            .map(|(c, state)| {
-                let mut g = Graph::new();
-                g.freeze(c.params());
-                let o = g.constant(p.obs.clone());
-                let a = g.leaf(action.clone());
-                let q = c.forward(&mut g, o, a, batch, state.as_ref()).q;
-                (g, a, q)
-            })
-            .collect();
-
-        // min Qₖ, and which critic each element's minimum came from.
-        let mut qmin = critic_graphs[0].0.value(critic_graphs[0].2).clone();
-        let mut chosen = vec![0usize; qmin.len()];
-        for (k, (g, _, q)) in critic_graphs.iter().enumerate().skip(1) {
-            for ((m, c), &x) in qmin
-                .data_mut()
-                .iter_mut()
-                .zip(&mut chosen)
-                .zip(g.value(*q).data())
-            {
-                // `Graph::minimum`'s rule: the earlier operand unless it is not ≤ the
-                // later one (NaN included).
-                if (*m)
-                    .partial_cmp(&x)
-                    .is_none_or(|o| o == std::cmp::Ordering::Greater)
-                {
-                    *c = k;
-                }
-                *m = m.min(x);
-            }
-        }
-
-        // The loss from min Q and log π.
-        let mut gl = Graph::new();
-        let qv = gl.leaf(qmin);
-        let mv = gl.constant(p.mask.clone());
-        let lpv = log_prob.map(|lp| gl.leaf(ga.value(lp).clone()));
-        let per_step = match lpv {
-            Some(lp) => {
-                let alp = gl.scale(lp, p.alpha);
-                gl.sub(alp, qv)
-            }
-            None => gl.neg(qv),
-        };
-        let masked = gl.mul(per_step, mv);
-        let s = gl.sum(masked);
-        let loss = gl.scale(s, p.norm);
-        let lv = gl.value(loss).item();
-        let dl = gl.backward(loss);
-        let dq = dl
-            .var(qv)
-            .cloned()
-            .unwrap_or_else(|| Tensor::zeros(p.mask.rows(), p.mask.cols()));
-
-        // ∂L/∂ã through each critic, from the share of ∂L/∂min Q it chose.
-        let dacts: Vec<Tensor> = critic_graphs
-            .par_iter_mut()
-            .enumerate()
-            .map(|(k, (g, a, q))| {
-                let mut seed = Tensor::zeros(dq.rows(), dq.cols());
-                for ((s, &d), &c) in seed.data_mut().iter_mut().zip(dq.data()).zip(&chosen) {
-                    *s += if c == k { d } else { 0.0 };
-                }
-                let grads = g.backward_with(*q, seed);
-                grads
-                    .var(*a)
-                    .cloned()
-                    .unwrap_or_else(|| Tensor::zeros(action.rows(), action.cols()))
-            })
-            .collect();
-        let mut dact = dacts.last().expect("at least one critic").clone();
-        for d in dacts.iter().rev().skip(1) {
-            for (x, &y) in dact.data_mut().iter_mut().zip(d.data()) {
-                *x += y;
-            }
-        }
-        drop(critic_graphs);
-
-        let mut seeds = vec![(act, dact)];
-        if let (Some(lp), Some(lpv)) = (log_prob, lpv) {
-            if let Some(d) = dl.var(lpv) {
-                seeds.push((lp, d.clone()));
-            }
-        }
-        let lp_values = log_prob.map(|lp| ga.value(lp).clone());
-        let grad = ga.backward_seeded(seeds).take(self.actor.params()).ok_or(
-            esrl_nn::NnError::NoGradient {
-                len: self.actor.params().len(),
-            },
-        );
-        (grad, lv, lp_values)
     }
 
     /// Eq. 6, one Adam step on log α when α is learned:
@@ -616,18 +515,6 @@ impl Agent {
         let mut grad = [-(mean_lp + entropy.target)];
         if grad[0].is_finite() {
             self.opt_alpha.step(&mut self.log_alpha, &mut grad)?;
-        }
-        Ok(())
-    }
-
-    /// Eq. 7: θ̄ ← τθ + (1 − τ)θ̄ for the target critics, and the target actor of TD3/DDPG.
-    fn update_targets(&mut self) -> Result<(), AgentError> {
-        let tau = self.cfg.tau as f32;
-        for (t, c) in self.critic_targets.iter_mut().zip(&self.critics) {
-            t.params_mut().polyak_update(c.params(), tau)?;
-        }
-        if let Some(t) = &mut self.actor_target {
-            t.params_mut().polyak_update(self.actor.params(), tau)?;
         }
         Ok(())
     }
@@ -745,6 +632,191 @@ impl Agent {
             critic_targets,
         }
     }
+}
+
+/// One chunk's share of the actor loss, as [`actor_chunk`] returns it: the actor's
+/// gradient, the loss and (SAC) log π of the samples.
+type ActorPart = (Result<Vec<f32>, esrl_nn::NnError>, f32, Option<Tensor>);
+
+/// The first half of a chunk's actor loss, which reads the actor only: its graph at s, the
+/// action ã it gives (SAC: sampled with the chunk's share of ε) and SAC's log π(ã|s).
+struct ActorPass<'a> {
+    graph: Graph<'a>,
+    act: Var,
+    log_prob: Option<Var>,
+}
+
+/// Every chunk's [`ActorPass`], side by side on the rayon pool; `noise` is SAC's ε drawn for
+/// the whole batch in the order one [`esrl_nn::Actor::sample`] over it draws them, split
+/// like the batch ([`Agent::chunk_noise`]), or `None`s for the deterministic actors.
+fn actor_passes<'a>(
+    actor: &'a Actor,
+    chunks: &[Chunk],
+    noise: Vec<Option<Tensor>>,
+) -> Vec<ActorPass<'a>> {
+    chunks
+        .par_iter()
+        .zip(noise)
+        .map(|(ch, eps)| {
+            let p = &ch.part;
+            let mut graph = Graph::new();
+            let ov = graph.constant(p.obs.clone());
+            let out = actor.forward(&mut graph, ov, p.batch.max(1), ch.actor.as_ref());
+            let (act, log_prob) = match eps {
+                Some(eps) => {
+                    let s = actor.sample_with_noise(&mut graph, &out, eps);
+                    (s.action, Some(s.log_prob))
+                }
+                None => (actor.deterministic(&mut graph, &out), None),
+            };
+            ActorPass {
+                graph,
+                act,
+                log_prob,
+            }
+        })
+        .collect()
+}
+
+/// The second half of every chunk's actor loss ([`actor_chunk`]), through the stepped
+/// critics, side by side on the rayon pool.
+fn actor_losses(
+    critics: &[Critic],
+    actor: &Actor,
+    chunks: &[Chunk],
+    passes: Vec<ActorPass<'_>>,
+) -> Vec<ActorPart> {
+    chunks
+        .par_iter()
+        .zip(passes)
+        .map(|(ch, pass)| actor_chunk(critics, actor, ch, pass))
+        .collect()
+}
+
+/// Eq. 7 for the target critics: θ̄ ← τθ + (1 − τ)θ̄, one target after the other.
+fn polyak(targets: &mut [Critic], critics: &[Critic], tau: f32) -> Result<(), AgentError> {
+    for (t, c) in targets.iter_mut().zip(critics) {
+        t.params_mut().polyak_update(c.params(), tau)?;
+    }
+    Ok(())
+}
+
+/// One chunk's share of the actor loss from its [`ActorPass`]: the actor's gradient, the
+/// loss and (SAC) log π. The graph is cut at the action so the critics run side by side on
+/// the rayon pool: the actor's graph gave ã (and log π); each critic's own graph gives
+/// Qₖ(s, ã) with ã as a leaf; a small graph gives the loss, its value and its gradients
+/// with respect to min Qₖ and log π; the minimum's derivative goes to the critic it chose
+/// (ties to the first, as [`Graph::minimum`]); each critic's graph turns it into ∂L/∂ã;
+/// their sum, last critic first as one graph's reverse pass would add them, and ∂L/∂log π
+/// seed the actor's reverse pass. The same numbers as one graph of the whole loss.
+fn actor_chunk(critics: &[Critic], actor: &Actor, ch: &Chunk, pass: ActorPass<'_>) -> ActorPart {
+    let p = &ch.part;
+    let batch = p.batch.max(1);
+    let ActorPass {
+        graph: mut ga,
+        act,
+        log_prob,
+    } = pass;
+    // SAC takes the minimum of its critics; TD3 and DDPG follow Q₁.
+    let used = if log_prob.is_some() { critics.len() } else { 1 };
+    let action = ga.value(act).clone();
+
+    // Each critic on its own graph: Qₖ(s, ã) with ã a leaf.
+    let mut critic_graphs: Vec<_> = critics[..used]
+        .par_iter()
+        .zip(&ch.critics)
+        .map(|(c, state)| {
+            let mut g = Graph::new();
+            g.freeze(c.params());
+            let o = g.constant(p.obs.clone());
+            let a = g.leaf(action.clone());
+            let q = c.forward(&mut g, o, a, batch, state.as_ref()).q;
+            (g, a, q)
+        })
+        .collect();
+
+    // min Qₖ, and which critic each element's minimum came from.
+    let mut qmin = critic_graphs[0].0.value(critic_graphs[0].2).clone();
+    let mut chosen = vec![0usize; qmin.len()];
+    for (k, (g, _, q)) in critic_graphs.iter().enumerate().skip(1) {
+        for ((m, c), &x) in qmin
+            .data_mut()
+            .iter_mut()
+            .zip(&mut chosen)
+            .zip(g.value(*q).data())
+        {
+            // `Graph::minimum`'s rule: the earlier operand unless it is not ≤ the
+            // later one (NaN included).
+            if (*m)
+                .partial_cmp(&x)
+                .is_none_or(|o| o == std::cmp::Ordering::Greater)
+            {
+                *c = k;
+            }
+            *m = m.min(x);
+        }
+    }
+
+    // The loss from min Q and log π.
+    let mut gl = Graph::new();
+    let qv = gl.leaf(qmin);
+    let mv = gl.constant(p.mask.clone());
+    let lpv = log_prob.map(|lp| gl.leaf(ga.value(lp).clone()));
+    let per_step = match lpv {
+        Some(lp) => {
+            let alp = gl.scale(lp, p.alpha);
+            gl.sub(alp, qv)
+        }
+        None => gl.neg(qv),
+    };
+    let masked = gl.mul(per_step, mv);
+    let s = gl.sum(masked);
+    let loss = gl.scale(s, p.norm);
+    let lv = gl.value(loss).item();
+    let dl = gl.backward(loss);
+    let dq = dl
+        .var(qv)
+        .cloned()
+        .unwrap_or_else(|| Tensor::zeros(p.mask.rows(), p.mask.cols()));
+
+    // ∂L/∂ã through each critic, from the share of ∂L/∂min Q it chose.
+    let dacts: Vec<Tensor> = critic_graphs
+        .par_iter_mut()
+        .enumerate()
+        .map(|(k, (g, a, q))| {
+            let mut seed = Tensor::zeros(dq.rows(), dq.cols());
+            for ((s, &d), &c) in seed.data_mut().iter_mut().zip(dq.data()).zip(&chosen) {
+                *s += if c == k { d } else { 0.0 };
+            }
+            let grads = g.backward_with(*q, seed);
+            grads
+                .var(*a)
+                .cloned()
+                .unwrap_or_else(|| Tensor::zeros(action.rows(), action.cols()))
+        })
+        .collect();
+    let mut dact = dacts.last().expect("at least one critic").clone();
+    for d in dacts.iter().rev().skip(1) {
+        for (x, &y) in dact.data_mut().iter_mut().zip(d.data()) {
+            *x += y;
+        }
+    }
+    drop(critic_graphs);
+
+    let mut seeds = vec![(act, dact)];
+    if let (Some(lp), Some(lpv)) = (log_prob, lpv) {
+        if let Some(d) = dl.var(lpv) {
+            seeds.push((lp, d.clone()));
+        }
+    }
+    let lp_values = log_prob.map(|lp| ga.value(lp).clone());
+    let grad = ga
+        .backward_seeded(seeds)
+        .take(actor.params())
+        .ok_or(esrl_nn::NnError::NoGradient {
+            len: actor.params().len(),
+        });
+    (grad, lv, lp_values)
 }
 
 #[cfg(test)]
