@@ -148,7 +148,25 @@ fn a_stopped_comparison_starts_no_other_run_and_resumes_exactly() {
     assert!(!split.join("table.md").exists(), "{stderr}");
 
     let resume = args(&split);
-    ok(&resume.iter().map(String::as_str).collect::<Vec<_>>());
+    let resumed = ok(&resume.iter().map(String::as_str).collect::<Vec<_>>());
+    // The resumed run reports its time in this command and its whole training time.
+    let line = resumed
+        .lines()
+        .find(|l| l.contains("finished") && l.contains("es-td3-s0"))
+        .unwrap_or_else(|| panic!("{resumed}"));
+    let total: f64 = line
+        .split('(')
+        .nth(1)
+        .and_then(|t| t.strip_suffix(" s of training in all)"))
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(first.join("summary.json")).unwrap())
+            .unwrap();
+    assert!(
+        (total - summary["wall_s"].as_f64().unwrap()).abs() < 0.051,
+        "{line}"
+    );
     let whole = args(&straight);
     ok(&whole.iter().map(String::as_str).collect::<Vec<_>>());
     for run in ["es-td3-s0", "sac-s0", "td3-s0"] {
