@@ -6,7 +6,8 @@
 #   3. each run's config, metrics and evaluations (collect.py, traces removed) into compare/;
 #   4. Fig. 5 from the handed-over policies' evaluations, and the gait pictures (from 20 s
 #      of episode 0) of each agent's best run (most finishes from the 10 starts, then the
-#      longest distance).
+#      longest distance);
+#   5. Table 1's learning columns at equal generations/episodes (equal-index.py).
 # usage: finish-compare.sh ESRL PYTHON CMP_DIR      (PYTHON with esrl_rs installed)
 # A run that is not finished is trained by step 1 (the same command resumes it).
 set -euo pipefail
@@ -42,4 +43,7 @@ for d in sorted(Path(sys.argv[1]).glob("*-s[0-9]")):
 for _, name in best.values():
     print(name)
 PY
+# Table 1's learning columns at equal generations/episodes (the paper's budget), from the
+# same runs' curves.
+"$PY" "$HERE/equal-index.py" "$CMP" --out "$OUT/equal-index.md"
 echo "record in $OUT"
