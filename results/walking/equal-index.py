@@ -61,6 +61,13 @@ for agent in order:
     st = metrics.mean_sd(steps)
     st_sd = f" ± {st['sd']:.3g}" if st["sd"] is not None else ""
     lines.append(f"| {agent} | {len(seeds)} | {st['mean']:.3g}{st_sd} | " + " | ".join(cells) + " |")
+lines += [
+    "",
+    "Episodes-to-Target: the first index whose trailing 50-value mean (of the values so far "
+    "while fewer than 50) reaches 80 % of the agent's median Best-Win-50 on the cut curves; "
+    "0 when the first generation already does (an ES run's generation 0 scores its "
+    "warm-started policy).",
+]
 text = "\n".join(lines) + "\n"
 if args.out:
     args.out.write_text(text)
