@@ -43,6 +43,12 @@ if (run / "best" / "best.json").is_file():
     shutil.copy(run / "best" / "best.json", rec / "best" / "best.json")
     strip(run / "best" / "eval.json", rec / "best" / "eval.json")
 PY
-"$PY" -m esrl_rs.report --gait "$policy" --out "$CMP/pictures/$name" --dpi 100 --start 20 \
-    >/dev/null 2>&1 || echo "[$name] gait pictures failed" >&2
+pics="$CMP/pictures/$name"
+rm -rf "$pics"
+if "$PY" -m esrl_rs.report --gait "$policy" --out "$pics" --dpi 100 --start 20 >/dev/null; then
+    mkdir -p "$rec/pictures"
+    cp "$pics"/gait/*/*.png "$rec/pictures/"
+else
+    echo "[$name] gait pictures failed" >&2
+fi
 echo "[$name] done in $(( $(date +%s) - t0 )) s: record in $rec"

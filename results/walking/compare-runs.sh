@@ -9,8 +9,9 @@
 #                         best/{best.json,eval.json} (`esrl eval RUN/best --episodes 10`);
 #                         evaluations without their per-step traces but episode 0's path
 #                         (time, x, y: Fig. 5c)
-#   CMP/pictures/<run>/   the gait pictures of the policy the run hands over (20 s of
-#                         episode 0): ES runs' best/, plain runs' last checkpoint
+#                         and pictures/: the gait pictures (gait diagram, joint angles,
+#                         side view; 20 s of episode 0) of the policy the run hands over,
+#                         ES runs' best/, plain runs' last checkpoint
 # usage: compare-runs.sh ESRL PYTHON CMP JOBS RUN...      (RUN = <agent>-s<seed>, e.g. td3-s1;
 #        PYTHON: an absolute path, with esrl_rs installed; JOBS runs at a time, one thread each)
 # A run folder with a checkpoint is resumed; a finished one is only evaluated and recorded.

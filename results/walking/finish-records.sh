@@ -37,5 +37,5 @@ for best, stem in [(False, "table-last"), (True, "table1")]:
             print(f"note ({stem}): {note}")
 print(f"{len(runs)} runs tabulated; missing: {', '.join(missing) or 'none'}")
 PY
-"$PY" "$HERE/equal-index.py" "$HERE/compare" --out "$HERE/compare/equal-index.md"
+(cd "$HERE" && "$PY" equal-index.py compare --out compare/equal-index.md)
 echo "tables and Fig. 5 in $HERE/compare"
