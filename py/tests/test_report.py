@@ -8,14 +8,17 @@ import sys
 from pathlib import Path
 from typing import Callable, List
 
+import numpy as np
 import pytest
 
 import esrl_rs
 from esrl_rs import report
 
 PNG = b"\x89PNG\r\n\x1a\n"
-ALL_PANELS = ["fig5.png", "fig5a_learning_curves.png", "fig5b_q0.png",
-              "fig5c_lateral_deviation.png", "fig5d_power_per_actuator.png"]
+ALL_PANELS = ["fig5.png", "fig5a_learning_curves.png", "fig5a_learning_curves_env_steps.png",
+              "fig5b_q0.png", "fig5c_lateral_deviation.png", "fig5d_power_per_actuator.png"]
+CURVE_PNGS = ["fig5.png", "fig5a_learning_curves.png", "fig5a_learning_curves_env_steps.png",
+              "fig5b_q0.png"]
 GAIT_PNGS = ["gait_diagram.png", "joint_angles.png", "stick_filmstrip.png"]
 
 
@@ -62,9 +65,8 @@ def test_report_cli_with_two_runs_without_eval(tmp_path: Path) -> None:
     assert proc.returncode == 0, proc.stderr
     assert "TD3: 2 run(s)" in proc.stdout
     assert "fig5c_lateral_deviation.png skipped" in proc.stdout
-    assert _files(out) == ["fig5.png", "fig5a_learning_curves.png", "fig5b_q0.png",
-                           "table1.csv", "table1.md"]
-    _check_pngs(out, ["fig5.png", "fig5a_learning_curves.png", "fig5b_q0.png"])
+    assert _files(out) == CURVE_PNGS + ["table1.csv", "table1.md"]
+    _check_pngs(out, CURVE_PNGS)
     assert "## Notes" in (out / "table1.md").read_text(encoding="utf-8")
 
 
@@ -77,8 +79,8 @@ def test_report_from_two_cli_runs(cli_train: Callable[..., Path], tmp_path: Path
     r = report.render_report([a, b], out, dpi=60)
     assert set(r.agents) == {"sac", "es-sac"}
     pngs = [p.name for p in r.files if p.suffix == ".png"]
-    # no eval.json from the CLI here: (a), (b) and the combined figure
-    assert sorted(pngs) == ["fig5.png", "fig5a_learning_curves.png", "fig5b_q0.png"]
+    # no eval.json from the CLI here: (a), (a) against env steps, (b) and the combined figure
+    assert sorted(pngs) == CURVE_PNGS
     _check_pngs(out, pngs)
     md = (out / "table1.md").read_text(encoding="utf-8")
     assert "| es-sac | 1 |" in md and "| sac | 1 |" in md
@@ -161,6 +163,18 @@ def test_gait_pictures_of_one_run(cli_train: Callable[..., Path],
     assert _files(out / "gait" / "one") == GAIT_PNGS
     with pytest.raises(ValueError, match="episode 3 not in eval.json"):
         gait.render_gait(run, tmp_path / "none", episode=3)
+
+
+def test_binned_by_steps_averages_each_bin_and_carries_the_curve_over_empty_ones() -> None:
+    edges = np.array([0.0, 25.0, 50.0, 75.0, 100.0, 125.0])
+    # bins: [0, 25) holds 1 and 3; [25, 50) holds 5; [50, 75) is empty inside the run's span
+    # (carries 5 over); [75, 100) holds 7 (NaN left out); [100, 125] is after the last row.
+    got = report.binned_by_steps([10, 20, 35, 90, 95], [1.0, 3.0, 5.0, 7.0, np.nan], edges)
+    np.testing.assert_array_equal(got[:4], [2.0, 5.0, 5.0, 7.0])
+    assert np.isnan(got[4])
+    # a row on the last edge belongs to the last bin; rows before the first are NaN
+    got = report.binned_by_steps([125, 130], [4.0, 9.0], edges)
+    assert np.isnan(got[:4]).all() and got[4] == 4.0
 
 
 def test_report_bad_path(tmp_path: Path) -> None:

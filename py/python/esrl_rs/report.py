@@ -12,6 +12,10 @@ Runs are grouped by agent (``config.toml`` key ``agent``). Writes to ``DIR``:
 - ``fig5d_power_per_actuator.png``: mean |power| per actuator, mean ± SD across seeds (needs
   ``eval.json``);
 - ``fig5.png``: the four panels together;
+- ``fig5a_learning_curves_env_steps.png``: the learning curves against environment steps
+  instead of generations/episodes (each seed's curve averaged over 200 equal bins of env
+  steps, :func:`binned_by_steps`; mean ± SD across seeds), the axis on which a comparison at
+  equal env steps (``esrl compare --equal-steps``) is read;
 - ``table1.md`` (Table 1, the per-actuator and the per-joint tables, Markdown) and
   ``table1.csv``;
 - ``gait/<run>/``, for every run whose ``eval.json`` has the per-step trace of ``esrl eval``
@@ -54,6 +58,7 @@ __all__ = [
     "agent_color",
     "agent_label",
     "agent_runs",
+    "binned_by_steps",
     "main",
     "render_gait",
     "render_report",
@@ -189,6 +194,61 @@ def _band_plot(ax: Any, groups: Dict[str, List[Run]], column: str, ylabel: str) 
         drawn = True
     ax.set_xlabel(_x_label(groups))
     ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    if drawn:
+        ax.legend(fontsize=8)
+    return drawn
+
+
+def binned_by_steps(steps: Sequence[float], values: Sequence[float],
+                    edges: np.ndarray) -> np.ndarray:
+    """The mean of ``values`` whose ``steps`` fall in each bin ``[edges[k], edges[k + 1])``
+    (the last bin includes its right edge). A bin without a row inside the run's span takes
+    the value of the bin before it (the curve as it stood); bins before the run's first row
+    or after its last are NaN. Non-finite values are left out."""
+    steps = np.asarray(steps, dtype=float)
+    values = np.asarray(values, dtype=float)
+    bins = len(edges) - 1
+    k = np.searchsorted(edges, steps, side="right") - 1
+    k[steps == edges[-1]] = bins - 1
+    ok = (k >= 0) & (k < bins) & np.isfinite(values) & np.isfinite(steps)
+    sums = np.bincount(k[ok], weights=values[ok], minlength=bins)
+    counts = np.bincount(k[ok], minlength=bins)
+    out = np.full(bins, np.nan)
+    out[counts > 0] = sums[counts > 0] / counts[counts > 0]
+    filled = np.flatnonzero(counts)
+    if filled.size:
+        for i in range(filled[0] + 1, filled[-1]):
+            if counts[i] == 0:
+                out[i] = out[i - 1]
+    return out
+
+
+def _panel_curves_steps(ax: Any, groups: Dict[str, List[Run]],
+                        rows: List[Dict[str, Any]]) -> bool:
+    ax.set_title("Learning curves against environment steps (mean ± SD)")
+    runs = [r for rs in groups.values() for r in rs
+            if "env_steps" in r.metrics and "curve" in r.metrics and len(r)]
+    if not runs:
+        return False
+    top = max(float(np.nanmax(np.asarray(r.metrics["env_steps"], dtype=float))) for r in runs)
+    edges = np.linspace(0.0, top, 201)
+    centers = 0.5 * (edges[:-1] + edges[1:])
+    drawn = False
+    for i, (agent, members) in enumerate(groups.items()):
+        table = [binned_by_steps(r.metrics["env_steps"], r.metrics["curve"], edges)
+                 for r in members if r in runs]
+        if not table:
+            continue
+        mean, sd = _mean_sd(np.vstack(table))
+        color = agent_color(agent, i)
+        ax.plot(centers, mean, color=color, lw=1.5,
+                label=f"{agent_label(agent)} (n={len(table)})")
+        if np.isfinite(sd).any():
+            ax.fill_between(centers, mean - sd, mean + sd, color=color, alpha=0.25, lw=0)
+        drawn = True
+    ax.set_xlabel("Environment steps")
+    ax.set_ylabel("Return (mean per bin of env steps)")
     ax.grid(True, alpha=0.3)
     if drawn:
         ax.legend(fontsize=8)
@@ -403,6 +463,17 @@ def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
             report.notes.append(f"{name} skipped: {why}")
             cax.text(0.5, 0.5, f"no data:\n{why}", ha="center", va="center", wrap=True,
                      transform=cax.transAxes, fontsize=9, color="0.4")
+    fig = Figure(figsize=(6.5, 4.5), layout="constrained")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        drawn = _panel_curves_steps(fig.add_subplot(), groups, rows)
+    if drawn:
+        path = out_dir / "fig5a_learning_curves_env_steps.png"
+        fig.savefig(path, dpi=dpi)
+        report.files.append(path)
+    else:
+        report.notes.append("fig5a_learning_curves_env_steps.png skipped: no run has "
+                            "`env_steps` and `curve` columns")
     combined.suptitle("Fig. 5: " + ", ".join(agent_label(a) for a in groups))
     combined_path = out_dir / "fig5.png"
     combined.savefig(combined_path, dpi=dpi)
