@@ -9,6 +9,8 @@
 #                                 `esrl compare --eval-best` tabulates it
 #   compare/fig5*.png             Fig. 5 from the same evaluations (c: episode 0's path)
 #   compare/equal-index.md        Table 1's learning columns at equal generations/episodes
+#   compare/seeds.md              the gait of every run's handed-over policy and, per agent,
+#                                 the seeds that meet the bar (seeds.py --compare)
 # usage: finish-records.sh PYTHON           (PYTHON with esrl_rs installed)
 # Unfinished or missing runs are left out and listed in the tables' notes.
 set -euo pipefail
@@ -38,4 +40,5 @@ for best, stem in [(False, "table-last"), (True, "table1")]:
 print(f"{len(runs)} runs tabulated; missing: {', '.join(missing) or 'none'}")
 PY
 (cd "$HERE" && "$PY" equal-index.py compare --out compare/equal-index.md)
+(cd "$HERE" && "$PY" seeds.py --compare > compare/seeds.md)
 echo "tables and Fig. 5 in $HERE/compare"

@@ -1,12 +1,19 @@
 """The seeds tables of README.md: the gait of each seed's kept policy against the issue's goals,
-for today's `--preset walking` and for the preset before it.
+for today's `--preset walking` and for the preset before it; with `--compare`, the same for
+every run of the six-agent comparison (the policy each run hands over: ES runs' `best/`,
+plain runs' last checkpoint, from the records in compare/), and per agent the seeds whose
+policy meets the bar (classified `walk` in most episodes, finishing from >= 8 of 10 starts).
 
-Usage: python seeds.py   (reads the eval reports in this folder)
+Usage: python seeds.py [--compare]   (reads the eval reports in this folder)
 """
 
 import json
 import statistics
+import sys
 from collections import Counter
+from pathlib import Path
+
+AGENTS = ["es-sac", "es-td3", "es-ddpg", "sac", "td3", "ddpg"]
 
 ROWS = [
     ("0", "`best/` at the end (gen 323, 1.47 M steps)", "runs/walking-chatter-clip-cap-s0/best-eval.json"),
@@ -47,7 +54,40 @@ def table(rows):
               f"| {cyc('alternation'):.2f} | {100 * cyc('flight'):.1f} | {100 * cyc('double_support'):.1f} |")
 
 
+def meets_bar(path):
+    """Classified `walk` in most of the episodes and finishing from at least 8 of them."""
+    g = [ep["gait"] for ep in json.load(open(path))["episodes"]]
+    walks = sum(x["cycle"]["gait_class"] == "walk" for x in g)
+    return 2 * walks > len(g) and sum(x["track_time"] is not None for x in g) >= 8
+
+
+def compare():
+    rows, seeds_in, bar = [], {}, {}
+    for agent in AGENTS:
+        for seed in range(3):
+            run = Path("compare") / f"{agent}-s{seed}"
+            path = run / "best" / "eval.json" if agent.startswith("es-") else run / "eval.json"
+            if not path.is_file():
+                continue
+            label = f"{agent} `best/`" if agent.startswith("es-") else f"{agent}, last"
+            rows.append((str(seed), label, str(path)))
+            seeds_in.setdefault(agent, []).append(seed)
+            if meets_bar(path):
+                bar.setdefault(agent, []).append(seed)
+    table(rows)
+    print()
+    print("| agent | seeds with a record | seeds meeting the bar |")
+    print("|---|---|---|")
+    for agent, seeds in seeds_in.items():
+        met = bar.get(agent, [])
+        print(f"| {agent} | {', '.join(map(str, seeds))} "
+              f"| {len(met)} ({', '.join(map(str, met)) or 'none'}) |")
+
+
 def main():
+    if "--compare" in sys.argv[1:]:
+        compare()
+        return
     table(ROWS)
     print()
     table(PREVIOUS)
