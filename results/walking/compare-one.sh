@@ -1,20 +1,22 @@
 #!/bin/bash
 # One run of the six-agent comparison: trains (or resumes) CMP/<run>, evaluates it and
 # writes its record; compare-runs.sh calls it, one process per run.
-# usage: compare-one.sh ESRL PYTHON CMP RUN          (see compare-runs.sh)
+# usage: compare-one.sh ESRL PYTHON CMP RUN          (see compare-runs.sh; RECORDS and
+#        TRAIN_ARGS as there)
 set -euo pipefail
 ESRL=$1; PY=$2; CMP=$3; name=$4
 HERE=$(cd "$(dirname "$0")" && pwd)
 agent=${name%-s*}; seed=${name##*-s}
-run="$CMP/$name" rec="$HERE/compare/$name" log="$CMP/$name.log"
+run="$CMP/$name" rec="$HERE/${RECORDS:-compare}/$name" log="$CMP/$name.log"
 t0=$(date +%s)
 if [ -f "$run/summary.json" ] && grep -q '"finished": *true' "$run/summary.json"; then
     echo "[$name] finished before"
 elif [ -d "$run/checkpoint" ]; then
     "$ESRL" train --resume "$run" --threads 1 --no-progress >>"$log" 2>&1
 else
+    # shellcheck disable=SC2086  # TRAIN_ARGS is a list of flags
     "$ESRL" train "$agent" --preset walking --seed "$seed" --threads 1 --out "$run" \
-        --no-progress >>"$log" 2>&1
+        ${TRAIN_ARGS:-} --no-progress >>"$log" 2>&1
 fi
 "$ESRL" eval "$run" --episodes 10 >"$run.eval.txt"
 policy=$run

@@ -15,8 +15,12 @@
 # usage: compare-runs.sh ESRL PYTHON CMP JOBS RUN...      (RUN = <agent>-s<seed>, e.g. td3-s1;
 #        PYTHON: an absolute path, with esrl_rs installed; JOBS runs at a time, one thread each)
 # A run folder with a checkpoint is resumed; a finished one is only evaluated and recorded.
+# Environment: RECORDS  the records' folder under results/walking (default compare);
+#              TRAIN_ARGS  flags added to a new run's `esrl train` (the equal-generations
+#                          comparison: "--generations 411 --episodes 411 --steps 1000000000")
 set -euo pipefail
 ESRL=$(realpath "$1"); PY=$2; CMP=$3; JOBS=$4; shift 4
 HERE=$(cd "$(dirname "$0")" && pwd)
-mkdir -p "$CMP" "$HERE/compare"
+mkdir -p "$CMP" "$HERE/${RECORDS:-compare}"
+export RECORDS TRAIN_ARGS
 printf '%s\n' "$@" | xargs -P "$JOBS" -I{} bash "$HERE/compare-one.sh" "$ESRL" "$PY" "$CMP" {}

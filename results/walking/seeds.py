@@ -2,9 +2,10 @@
 for today's `--preset walking` and for the preset before it; with `--compare`, the same for
 every run of the six-agent comparison (the policy each run hands over: ES runs' `best/`,
 plain runs' last checkpoint, from the records in compare/), and per agent the seeds whose
-policy meets the bar (classified `walk` in most episodes, finishing from >= 8 of 10 starts).
+policy meets the bar (classified `walk` in most episodes, finishing from >= 8 of 10 starts);
+`--compare compare-equal-gen` does it for the comparison at equal generations/episodes.
 
-Usage: python seeds.py [--compare]   (reads the eval reports in this folder)
+Usage: python seeds.py [--compare [RECORDS]]   (reads the eval reports in this folder)
 """
 
 import json
@@ -61,11 +62,11 @@ def meets_bar(path):
     return 2 * walks > len(g) and sum(x["track_time"] is not None for x in g) >= 8
 
 
-def compare():
+def compare(records="compare"):
     rows, seeds_in, bar = [], {}, {}
     for agent in AGENTS:
         for seed in range(3):
-            run = Path("compare") / f"{agent}-s{seed}"
+            run = Path(records) / f"{agent}-s{seed}"
             path = run / "best" / "eval.json" if agent.startswith("es-") else run / "eval.json"
             if not path.is_file():
                 continue
@@ -85,8 +86,9 @@ def compare():
 
 
 def main():
-    if "--compare" in sys.argv[1:]:
-        compare()
+    args = sys.argv[1:]
+    if args and args[0] == "--compare":
+        compare(*args[1:2])
         return
     table(ROWS)
     print()
