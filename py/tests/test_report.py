@@ -195,6 +195,22 @@ def test_colours_follow_the_paper() -> None:
     assert report.agent_label("es-ddpg") == "ES-DDPG"
 
 
+def test_report_pools_seeds_that_differ_only_in_how_they_ran(tmp_path: Path) -> None:
+    from conftest import write_run
+    runs = [write_run(tmp_path / f"es-sac-s{s}", "es-sac", s, [float(s + i) for i in range(10)],
+                      es=True) for s in (0, 1, 2)]
+    # seed 1 kept copies of best/ every 1 M steps and checkpointed more often, seed 2 ran on
+    # 4 threads: what they learn is the same experiment's
+    cfg = runs[1] / "config.toml"
+    cfg.write_text("best_every_steps = 1000000\ncheckpoint_every = 5\n"
+                   + cfg.read_text(encoding="utf-8"), encoding="utf-8")
+    cfg = runs[2] / "config.toml"
+    cfg.write_text("threads = 4\n" + cfg.read_text(encoding="utf-8"), encoding="utf-8")
+    rep = report.render_report(runs, tmp_path / "out", dpi=60, gait=False)
+    assert not [n for n in rep.notes if "pools" in n], rep.notes
+    assert report.config_differences([esrl_rs.load_run(r) for r in runs]) == ([], [])
+
+
 def test_report_refuses_to_pool_different_configurations(tmp_path: Path) -> None:
     from conftest import write_run
     runs = [write_run(tmp_path / f"td3-s{s}", "td3", s, [float(s + i) for i in range(10)])

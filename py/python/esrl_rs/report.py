@@ -353,8 +353,9 @@ def _gait_dir_name(run: Run, taken: Sequence[str]) -> str:
 
 
 #: Config keys that may differ between the seeds of one agent: the seed itself, how the run
-#: was executed, and the budget (a difference in budget is noted, not refused).
-_FREE_KEYS = ("seed", "threads", "checkpoint_every")
+#: was executed and what it kept on disk (checkpoints, copies of ``best/``), none of which
+#: changes what it learns, and the budget (a difference in budget is noted, not refused).
+_FREE_KEYS = ("seed", "threads", "checkpoint_every", "best_every_steps")
 _BUDGET_KEYS = ("generations", "episodes", "max_env_steps")
 
 
