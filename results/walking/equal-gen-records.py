@@ -14,7 +14,9 @@ comes from), best/ and pictures/ as recorded. A run whose kept policy is younger
 refused: it has to be trained to N generations (compare-runs.sh with
 TRAIN_ARGS="--generations N --episodes N --steps 1000000000").
 
-usage: python equal-gen-records.py N RUN...      (RUN = es-sac-s0, ...; reads compare/RUN)
+usage: python equal-gen-records.py N RUN... [--into DIR]   (RUN = es-sac-s0, ...; reads
+                 compare/RUN, writes DIR/RUN, default compare-equal-gen/RUN; with --into a
+                 folder path is the record itself: runs/screen2m-base-s0, the screens' base)
        python equal-gen-records.py N --check RUN...
                  (compares compare-equal-gen/RUN/metrics.csv, a retrain to N, with the
                   first N rows of compare/RUN/metrics.csv, every column but wall_s)
@@ -55,8 +57,8 @@ def check(n, name):
     return True
 
 
-def cut(n, name):
-    src, dst = FULL / name, EQUAL / name
+def cut(n, name, dst):
+    src = FULL / name
     best = json.loads((src / "best" / "best.json").read_text())
     rows = rows_of(src / "metrics.csv")
     if best["generation"] >= n:
@@ -91,19 +93,22 @@ def cut(n, name):
     })
     (dst / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     print(f"{name}: first {n} of {len(rows)} rows, kept policy from generation "
-          f"{best['generation']} -> {dst.relative_to(HERE)}")
+          f"{best['generation']} -> {dst}")
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("n", type=int)
     parser.add_argument("--check", action="store_true")
+    parser.add_argument("--into", type=Path, help="the record's folder (one RUN)")
     parser.add_argument("runs", nargs="+")
     args = parser.parse_args()
     if args.check:
         sys.exit(0 if all([check(args.n, r) for r in args.runs]) else 1)
+    if args.into and len(args.runs) != 1:
+        parser.error("--into takes one RUN")
     for r in args.runs:
-        cut(args.n, r)
+        cut(args.n, r, (Path.cwd() / args.into).resolve() if args.into else EQUAL / r)
 
 
 if __name__ == "__main__":
