@@ -22,6 +22,8 @@ ROWS = [
     ("1", "`best/` at 2.30 M steps (gen 324)", "runs/walking-chatter-clip-cap-s1/best-2.30M-eval.json"),
     ("2", "`best/` at the end (gen 473, 3.97 M steps)", "runs/walking-chatter-clip-cap-s2/best-eval.json"),
     ("2", "`best/` at 2.91 M steps (gen 422)", "runs/walking-chatter-clip-cap-s2/best-2.91M-eval.json"),
+    ("3", "`best/` at the end (gen 415, 2.13 M steps)", "runs/preset-walking-s3/best-eval.json"),
+    ("4", "`best/` at the end (gen 434, 3.59 M steps)", "runs/preset-walking-s4/best-eval.json"),
 ]
 
 # The preset before the chatter price, clipped targets and the open, capped track (commit
