@@ -35,18 +35,21 @@ pub struct UpdateTiming {
 }
 
 /// Times `reps` updates of an `algo` agent with networks `nets` for observations of
-/// `obs_dim` and actions of `act_dim`, after `warmup` untimed ones, its batch split into
-/// `batch_chunks` chunks (`rl.batch_chunks`).
+/// `obs_dim` and actions of `act_dim` on batches of `batch` sequences (recurrent) or
+/// transitions, after `warmup` untimed ones, its batch split into `batch_chunks` chunks
+/// (`rl.batch_chunks`).
+#[allow(clippy::too_many_arguments)]
 pub fn time_update(
     algo: Algo,
     nets: &NetConfig,
     obs_dim: usize,
     act_dim: usize,
+    batch: usize,
     reps: usize,
     warmup: usize,
     batch_chunks: usize,
 ) -> Result<UpdateTiming, AgentError> {
-    let mut run = RandomData::new(algo, nets, obs_dim, act_dim, 256, 0, batch_chunks)?;
+    let mut run = RandomData::new(algo, nets, obs_dim, act_dim, batch, 0, batch_chunks)?;
     for _ in 0..warmup {
         run.update()?;
     }

@@ -80,6 +80,13 @@ pub struct RlConfig {
     /// the lower one is for SAC a floor that policies keeping their entropy above −|A|·ln 2
     /// never reach. Default false (the paper bootstraps unclipped).
     pub clip_targets: bool,
+    /// Left↔right mirrored transitions: every odd-numbered window of each batch (1, 3, …) is
+    /// replaced by its mirror image through the sagittal plane (observations, next
+    /// observations and actions; rewards and ends unchanged), as if the buffer held every
+    /// transition and its mirror image (`esrl_sim::Mirror`; Yu, Turk & Liu 2018's remedy for
+    /// lopsided gaits). Needs a task with a mirror (the walking task). Default false.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub mirror: bool,
     /// Splits each update's batch into this many fixed chunks of consecutive sequences (or
     /// transitions) whose TD targets, critic losses and actor loss run side by side on the
     /// rayon pool, their gradients summed in chunk order (the update's noise is drawn for the
@@ -131,6 +138,7 @@ impl Default for RlConfig {
             alpha_lr: 3e-4,
             grad_clip: 10.0,
             clip_targets: false,
+            mirror: false,
             batch_chunks: 1,
             l2: 1e-4,
             initial_alpha: 1.0,

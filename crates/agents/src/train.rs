@@ -8,7 +8,7 @@ use crate::learner::{state_error, Learner, Row, TrainerState};
 use crate::policy::{ActMode, Policy};
 use crate::replay::{ReplayBuffer, SequenceBatch, Transition};
 use crate::rollout::{rollout, Actor, Episode};
-use esrl_sim::{run_episode, Env, EpisodeHook, MakeEnv, Step};
+use esrl_sim::{run_episode, Env, EpisodeHook, MakeEnv, Mirror, Step};
 use esrl_streams::Stream;
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
@@ -110,6 +110,23 @@ pub fn sample_batch(
     }
 }
 
+/// Replaces every odd-numbered window of `batch` (1, 3, …) by its mirror image: each step's
+/// observation, next observation and action through `mirror` (`rl.mirror`). Rewards, ends
+/// and masks stay: the mirrored transition is a transition of the task with the same reward.
+pub fn mirror_batch(batch: &mut SequenceBatch, mirror: &Mirror) {
+    let o = mirror.obs_map().len();
+    let a = mirror.action_map().len();
+    let mut scratch = Vec::with_capacity(o.max(a));
+    for t in 0..batch.window {
+        for b in (1..batch.batch).step_by(2) {
+            let row = batch.row(t, b);
+            mirror.obs_in_place(&mut batch.obs[row * o..(row + 1) * o], &mut scratch);
+            mirror.obs_in_place(&mut batch.next_obs[row * o..(row + 1) * o], &mut scratch);
+            mirror.action_in_place(&mut batch.action[row * a..(row + 1) * a], &mut scratch);
+        }
+    }
+}
+
 /// An agent, its replay buffer and its random stream ([`Stream::Trainer`]): the RL side of
 /// both learners. Trained alone it runs episodes ([`Trainer::episode`]); the hybrid loop
 /// stores its population's episodes here and runs the inner cycles ([`Trainer::train`]).
@@ -123,6 +140,8 @@ pub struct Trainer {
     seed: u64,
     env_steps: u64,
     episodes: usize,
+    /// The task's mirror, for `rl.mirror` ([`mirror_batch`]).
+    mirror: Option<Mirror>,
 }
 
 impl Trainer {
@@ -138,7 +157,14 @@ impl Trainer {
             seed,
             env_steps: 0,
             episodes: 0,
+            mirror: None,
         }
+    }
+
+    /// Sets the task's mirror that `rl.mirror` applies to every batch (none: batches are
+    /// used as drawn).
+    pub fn set_mirror(&mut self, mirror: Option<Mirror>) {
+        self.mirror = mirror;
     }
 
     /// The agent.
@@ -176,14 +202,25 @@ impl Trainer {
         self.env_steps >= self.agent.config().warm_start as u64
     }
 
-    /// One gradient update on a fresh batch.
+    /// One gradient update on a fresh batch (mirrored by `rl.mirror`).
     pub fn update(&mut self) -> Result<UpdateStats, AgentError> {
-        let batch = sample_batch(
+        let mut batch = sample_batch(
             &self.buffer,
             self.agent.config(),
             self.agent.recurrent(),
             &mut self.rng,
         );
+        if self.agent.config().mirror {
+            match &self.mirror {
+                Some(m) => mirror_batch(&mut batch, m),
+                None => {
+                    return Err(AgentError::State {
+                        field: "rl.mirror".into(),
+                        reason: "is on but the trainer was given no mirror of the task".into(),
+                    })
+                }
+            }
+        }
         self.agent.update(&batch)
     }
 

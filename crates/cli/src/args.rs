@@ -33,8 +33,9 @@ pub enum Command {
 /// Options shared by commands that train.
 #[derive(Debug, Clone, Args)]
 pub struct TrainOptions {
-    /// Named settings; a --config file and the flags below override them.
-    #[arg(long, value_enum, default_value_t = Preset::Paper)]
+    /// Named settings; a --config file and the flags below override them. `walking` (the
+    /// default) is the recipe that walks; `paper` the paper's literal §5 protocol.
+    #[arg(long, value_enum, default_value_t = Preset::Walking)]
     pub preset: Preset,
     /// TOML file overriding the preset (same keys as a run folder's config.toml).
     #[arg(long, value_name = "FILE.toml")]
@@ -57,9 +58,22 @@ pub struct TrainOptions {
     /// Environment-step budget: training stops once this many steps were taken (any agent).
     #[arg(long)]
     pub steps: Option<u64>,
+    /// `walk`: stop as soon as a walking check meets the bar (the policy is kept in
+    /// RUN/best/); `budget`: run the whole budget. [default: the config's, `budget`]
+    #[arg(long, value_enum)]
+    pub until: Option<Until>,
     /// Hide the progress bar (it is also hidden when stderr is not a terminal).
     #[arg(long)]
     pub no_progress: bool,
+}
+
+/// When a training stops (`--until`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Until {
+    /// At the first policy at the walking bar (`stop_at_walk = true`).
+    Walk,
+    /// When the budget is spent.
+    Budget,
 }
 
 impl TrainOptions {
@@ -74,6 +88,7 @@ impl TrainOptions {
             generations: self.generations,
             episodes: self.episodes,
             steps: self.steps,
+            stop_at_walk: self.until.map(|u| u == Until::Walk),
         }
     }
 }
@@ -201,6 +216,10 @@ pub enum BenchWhat {
         /// Network family.
         #[arg(long, value_enum, default_value_t = Arch::Lstm)]
         arch: Arch,
+        /// Sequences (LSTM) or transitions (MLP) per batch: 256 is the peer's size, 64 the
+        /// walking recipe's (`rl.batch_size`).
+        #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u64).range(1..=65536))]
+        batch: u64,
         /// Threads the update's products may use.
         #[arg(long, default_value_t = 1)]
         threads: usize,

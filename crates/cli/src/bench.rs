@@ -20,11 +20,12 @@ fn emit<T: Serialize>(json_out: bool, value: &T, text: String) -> Result<()> {
 
 /// Times the one update of training, `Agent::update` (critics, actor, α, targets), for SAC
 /// with the paper-size LSTM or the MLP 256×256 networks, on random data of the PyTorch
-/// baseline's shapes (`esrl_agents::bench`), on a pool of `threads` threads, the batch split
-/// into `batch_chunks` chunks (`rl.batch_chunks`).
+/// baseline's shapes (`esrl_agents::bench`; `batch` sequences or transitions), on a pool of
+/// `threads` threads, the batch split into `batch_chunks` chunks (`rl.batch_chunks`).
 pub fn update_ms(
     arch: Arch,
     obs_dim: usize,
+    batch: usize,
     reps: usize,
     threads: usize,
     batch_chunks: usize,
@@ -36,7 +37,9 @@ pub fn update_ms(
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads.max(1))
         .build()?;
-    Ok(pool.install(|| bench::time_update(Algo::Sac, &nets, obs_dim, 6, reps, 2, batch_chunks))?)
+    Ok(pool.install(|| {
+        bench::time_update(Algo::Sac, &nets, obs_dim, 6, batch, reps, 2, batch_chunks)
+    })?)
 }
 
 /// Generations timed by `bench es` (without gradient updates, so the policies stay random).
@@ -120,8 +123,8 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             let r = esrl_nn::bench::run(&esrl_nn::bench::BenchConfig::default())?;
             let c = &r.config;
             // The full update is training's own (`Agent::update`), on the same shapes.
-            let lstm = update_ms(Arch::Lstm, c.obs_dim, c.reps, 1, 1)?;
-            let mlp = update_ms(Arch::Mlp, c.obs_dim, c.reps * 5, 1, 1)?;
+            let lstm = update_ms(Arch::Lstm, c.obs_dim, 256, c.reps, 1, 1)?;
+            let mlp = update_ms(Arch::Mlp, c.obs_dim, 256, c.reps * 5, 1, 1)?;
             let ms = |t: &UpdateTiming| format!("{:.1} ms", t.ms_per_update);
             let text = format!(
                 "forward + backward on {} × {} steps, one thread:\n  \
@@ -149,19 +152,29 @@ pub fn run(what: &BenchWhat) -> Result<()> {
         }
         BenchWhat::Update {
             arch,
+            batch,
             threads,
             batch_chunks,
             json,
         } => {
-            let t = update_ms(*arch, 31, 7, *threads, *batch_chunks as usize)?;
+            let t = update_ms(
+                *arch,
+                31,
+                *batch as usize,
+                21,
+                *threads,
+                *batch_chunks as usize,
+            )?;
             let arch = format!("{arch:?}").to_lowercase();
             let text = format!(
-                "one SAC update ({arch}, {threads} thread(s), {batch_chunks} batch chunk(s)): \
-                 {:.2} ms median over {} reps (actor {} params, critic {} params)",
-                t.ms_per_update, t.reps, t.actor_params, t.critic_params
+                "one SAC update ({arch}, batch {batch}, {threads} thread(s), {batch_chunks} batch \
+                 chunk(s)): {:.2} ms median, {:.2} ms fastest, over {} reps (actor {} params, \
+                 critic {} params)",
+                t.ms_per_update, t.min_ms, t.reps, t.actor_params, t.critic_params
             );
             let r = json!({
                 "arch": arch,
+                "batch": batch,
                 "ms_per_update": t.ms_per_update,
                 "min_ms": t.min_ms,
                 "reps": t.reps,
@@ -187,8 +200,9 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                 Arch::Mlp
             };
             let chunks = cfg.rl.batch_chunks;
-            let upd = update_ms(arch, 31, 3, 1, chunks)?.ms_per_update;
-            let upd_n = update_ms(arch, 31, 3, *threads, chunks)?.ms_per_update;
+            let batch = cfg.rl.batch_size;
+            let upd = update_ms(arch, 31, batch, 3, 1, chunks)?.ms_per_update;
+            let upd_n = update_ms(arch, 31, batch, 3, *threads, chunks)?.ms_per_update;
             let train_s = upd * cfg.inner_cycles as f64 / 1e3;
             let (g1, whole) = whole_generation_s(*preset, 1, None)?;
             let (gn, _) = whole_generation_s(*preset, *threads, Some(whole))?;

@@ -154,12 +154,29 @@ pub fn learner_with(
     evaluator: Arc<dyn Evaluator>,
 ) -> Result<AnyLearner> {
     let agent = agent(cfg, envs)?;
+    let mirror = if cfg.rl.mirror {
+        let env = WalkEnv::from_model(
+            envs.model.clone().ok_or_else(|| {
+                Error::Msg("rl.mirror needs the walking task (it has no mirror here)".into())
+            })?,
+            cfg.walk.clone(),
+        )?;
+        Some(
+            env.mirror()
+                .context("rl.mirror: the robot's left↔right mirror")?,
+        )
+    } else {
+        None
+    };
     Ok(if cfg.agent.is_hybrid() {
         let mut hybrid = Hybrid::new(agent, cfg.es.clone(), cfg.inner_cycles, cfg.seed, evaluator);
         hybrid.set_updates_per_step(cfg.updates_per_step);
+        hybrid.trainer_mut().set_mirror(mirror);
         AnyLearner::Hybrid(Box::new(hybrid))
     } else {
-        AnyLearner::Plain(Box::new(Trainer::new(agent, cfg.seed)))
+        let mut trainer = Trainer::new(agent, cfg.seed);
+        trainer.set_mirror(mirror);
+        AnyLearner::Plain(Box::new(trainer))
     })
 }
 

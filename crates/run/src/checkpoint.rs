@@ -40,6 +40,7 @@
 //! latter.
 
 use crate::bail;
+use crate::check::{CheckResult, CheckState};
 use crate::config::{config_differences, TrainConfig};
 use crate::error::{Context, Result};
 use crate::run_dir::{write_atomic, write_json_atomic, RunDir};
@@ -75,6 +76,9 @@ pub struct RunState {
     /// `replay.safetensors` inside the folder).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub replay: Option<ReplayLog>,
+    /// The walking checks so far (runs with a `[check]`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub check: Option<CheckState>,
 }
 
 impl RunState {
@@ -87,6 +91,7 @@ impl RunState {
             curve: Vec::new(),
             q0: Vec::new(),
             replay: None,
+            check: None,
         }
     }
 }
@@ -151,6 +156,14 @@ pub fn find(run: &Path) -> Option<PathBuf> {
         .iter()
         .map(|d| run.join(d))
         .find(|d| d.join("state.json").exists() && d.join("agent.safetensors").exists())
+}
+
+/// The rows (generations or episodes) the checkpoint folder `dir` covers, read from its
+/// `state.json` without checking it (`None` when it cannot be read).
+pub fn rows_done(dir: &Path) -> Option<usize> {
+    let text = fs::read_to_string(dir.join("state.json")).ok()?;
+    let value: serde_json::Value = serde_json::from_str(&text).ok()?;
+    value.get("rows")?.as_u64().map(|r| r as usize)
 }
 
 /// Writes a checkpoint of `learner` into `run/checkpoint/` atomically: the new replay chunk
@@ -287,6 +300,10 @@ pub struct BestInfo {
     pub fitness: f64,
     /// Environment steps taken by the end of that generation.
     pub env_steps: u64,
+    /// What the walking check found for it, when the run chooses `best/` by the check
+    /// (`[check]`; then `fitness` is its row's curve value, not necessarily the highest).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub check: Option<CheckResult>,
 }
 
 /// Writes `RUN/best/`: `agent`, the agent whose policy scored the highest learning-curve

@@ -10,6 +10,8 @@
 //!   and a folder, new or resumed, for every front end.
 //! - [`training`]: [`Training`] drives any [`esrl_agents::Learner`] row by row into its
 //!   folder: metrics, summary, `RUN/best/`, checkpoints.
+//! - [`check`]: the walking check, a deterministic multi-start evaluation against the
+//!   walking bar that chooses `RUN/best/` and times the first walk.
 //! - [`checkpoint`], [`run_dir`], [`summary`]: the files, written atomically and verified
 //!   before they are trusted.
 //!
@@ -48,6 +50,7 @@
 //!   limitations on SIMD widths).
 
 pub mod build;
+pub mod check;
 pub mod checkpoint;
 pub mod config;
 mod error;

@@ -5,7 +5,7 @@
 
 use crate::bail;
 use crate::checkpoint;
-use crate::config::{AgentKind, EnvKind, Overrides, TrainConfig};
+use crate::config::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
 use crate::error::Result;
 use crate::run_dir::{write_atomic, RunDir};
 use std::path::PathBuf;
@@ -39,14 +39,19 @@ pub struct TrainPlan {
     pub notes: Vec<String>,
 }
 
-/// Where a run goes by default: `runs/<agent>-s<seed>` on the walking env (the same name
-/// `esrl compare` gives its runs), `runs/<agent>-<env>-s<seed>` on another env.
+/// Where a run goes by default: `runs/<agent>-s<seed>` for the default preset on the walking
+/// env, `runs/<agent>-<preset>-s<seed>` for another preset (`runs/es-sac-quick-s0`), with
+/// `-<env>` before the seed on another env (`runs/sac-paper-pendulum-s0`), so the quick
+/// start's commands never share a folder.
 pub fn default_out(cfg: &TrainConfig) -> PathBuf {
-    let name = match cfg.env {
-        EnvKind::Walk => format!("{}-s{}", cfg.agent.name(), cfg.seed),
-        EnvKind::Pendulum => format!("{}-pendulum-s{}", cfg.agent.name(), cfg.seed),
-    };
-    PathBuf::from("runs").join(name)
+    let mut name = cfg.agent.name().to_owned();
+    if cfg.preset != Preset::default() {
+        name = format!("{name}-{}", cfg.preset.name());
+    }
+    if cfg.env != EnvKind::Walk {
+        name = format!("{name}-{}", cfg.env.name());
+    }
+    PathBuf::from("runs").join(format!("{name}-s{}", cfg.seed))
 }
 
 /// Resolves `req`. A resume reads the folder's `config.toml` (the agent must match), applies
@@ -56,6 +61,19 @@ pub fn plan(req: &TrainRequest) -> Result<TrainPlan> {
     let Some(dir) = &req.resume else {
         let cfg = TrainConfig::resolve(req.agent, &req.overrides, req.seed)?;
         let root = req.out.clone().unwrap_or_else(|| default_out(&cfg));
+        if root.join(RunDir::JSONL).exists() {
+            let how = if checkpoint::find(&root).is_some() {
+                "continues it from its last checkpoint"
+            } else {
+                "starts it over (it stopped before its first checkpoint)"
+            };
+            bail!(
+                "{dir} already holds a run; `esrl train {agent} --resume {dir}` {how}, or \
+                 give this one a new folder with --out DIR",
+                dir = root.display(),
+                agent = req.agent.name(),
+            );
+        }
         return Ok(TrainPlan {
             cfg,
             root,
@@ -99,6 +117,20 @@ pub fn plan(req: &TrainRequest) -> Result<TrainPlan> {
     let stored = TrainConfig::load(&path)?;
     cfg.apply_budget(&req.overrides);
     cfg.validate()?;
+    if let Some(state) = checkpoint::find(dir).and_then(|c| checkpoint::rows_done(&c)) {
+        let (budget, unit) = if cfg.agent.is_hybrid() {
+            (cfg.generations, "generations")
+        } else {
+            (cfg.episodes, "episodes")
+        };
+        if budget < state {
+            bail!(
+                "--{unit} {budget}: {} has done {state} {unit} already; a budget below that \
+                 cannot continue it (config.toml is left as it was)",
+                dir.display()
+            );
+        }
+    }
     if cfg != stored {
         write_atomic(&path, cfg.to_toml()?.as_bytes())?;
     }

@@ -47,6 +47,47 @@ pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     write_atomic(path, text.as_bytes())
 }
 
+/// Appends `value` as one line of the JSON Lines file `path`, flushed.
+pub fn append_jsonl<T: Serialize>(path: &Path, value: &T) -> Result<()> {
+    let line = serde_json::to_string(value)?;
+    let mut f = OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(path)
+        .with_context(|| format!("opening {}", path.display()))?;
+    writeln!(f, "{line}").with_context(|| format!("writing {}", path.display()))?;
+    f.flush()
+        .with_context(|| format!("writing {}", path.display()))?;
+    Ok(())
+}
+
+/// Cuts the JSON Lines file `path` back to its first `lines` lines (a resumed run's rows past
+/// its checkpoint). A missing file is an empty one; one with fewer lines is refused.
+pub fn truncate_jsonl(path: &Path, lines: usize) -> Result<()> {
+    let kept: Vec<String> = if path.exists() {
+        let f = File::open(path).with_context(|| format!("opening {}", path.display()))?;
+        BufReader::new(f)
+            .lines()
+            .take(lines)
+            .collect::<std::io::Result<_>>()
+            .with_context(|| format!("reading {}", path.display()))?
+    } else {
+        Vec::new()
+    };
+    if kept.len() < lines {
+        bail!(
+            "{} has {} lines but the checkpoint expects {lines}",
+            path.display(),
+            kept.len()
+        );
+    }
+    let mut text = kept.join("\n");
+    if !kept.is_empty() {
+        text.push('\n');
+    }
+    write_atomic(path, text.as_bytes())
+}
+
 /// A run folder being written.
 #[derive(Debug)]
 pub struct RunDir {

@@ -4,10 +4,11 @@
 //! [`Training::finish`] writes the last checkpoint. Whoever drives it (the `esrl` binary)
 //! decides when to stop and what to print.
 
+use crate::check::{CheckRecord, CheckState, Checker, Trigger};
 use crate::checkpoint::{self, BestInfo, RunState};
-use crate::config::TrainConfig;
+use crate::config::{EnvKind, TrainConfig};
 use crate::error::{Context, Error, Result};
-use crate::run_dir::{write_atomic, RunDir};
+use crate::run_dir::{append_jsonl, truncate_jsonl, write_atomic, RunDir};
 use crate::summary::Summary;
 use esrl_agents::{AgentError, Learner, Row};
 use esrl_metrics::CurveSummary;
@@ -46,6 +47,8 @@ pub struct RowDone {
     pub best: f64,
     /// Its one-line description.
     pub summary: String,
+    /// The walking check run after this row, if one was due.
+    pub check: Option<CheckRecord>,
 }
 
 /// A learner and the run folder it trains into.
@@ -61,7 +64,12 @@ pub struct Training<L: Learner> {
     started: Instant,
     /// Training seconds before this session (resumed runs).
     wall0: f64,
+    /// The walking check, for runs with a `[check]` on the walking task.
+    checker: Option<Checker>,
 }
+
+/// The file of a run's walking checks, one [`CheckRecord`] per line.
+pub const CHECKS_FILE: &str = "checks.jsonl";
 
 impl<L: Learner> Training<L> {
     /// Opens `root` for `learner`, built fresh from `cfg`: a new folder, or, when `resume`,
@@ -103,6 +111,19 @@ impl<L: Learner> Training<L> {
             }
             (false, _) => (RunDir::create(root, &cfg.to_toml()?)?, Opening::New),
         };
+        let checker = match (&cfg.check, cfg.env) {
+            (Some(check), EnvKind::Walk) => Some(Checker::new(
+                check.clone(),
+                crate::build::load_model(&cfg.walk)?,
+                cfg.walk.clone(),
+                cfg.seed,
+            )),
+            _ => None,
+        };
+        if checker.is_some() {
+            let state = state.check.get_or_insert_with(CheckState::default);
+            truncate_jsonl(&root.join(CHECKS_FILE), state.records)?;
+        }
         let pool = crate::build::pool(cfg.threads)?;
         let started = Instant::now();
         learner.prepare(envs.as_ref())?;
@@ -118,6 +139,7 @@ impl<L: Learner> Training<L> {
                 pool,
                 started,
                 wall0,
+                checker,
             },
             opening,
         ))
@@ -147,13 +169,29 @@ impl<L: Learner> Training<L> {
         self.wall0 + self.started.elapsed().as_secs_f64()
     }
 
-    /// Whether the budget is spent: every row done, or the environment-step budget reached.
+    /// Whether the budget is spent: every row done, the environment-step budget reached, or,
+    /// with `stop_at_walk`, a policy at the walking bar found.
     pub fn done(&self) -> bool {
         let steps_spent = self
             .cfg
             .max_env_steps
             .is_some_and(|b| self.learner.env_steps() >= b);
-        self.state.rows >= self.total() || steps_spent
+        self.state.rows >= self.total() || steps_spent || self.walked_and_stops()
+    }
+
+    /// Whether the run stops because a policy met the walking bar (`stop_at_walk`).
+    pub fn walked_and_stops(&self) -> bool {
+        self.cfg.stop_at_walk && self.first_walk().is_some()
+    }
+
+    /// The first check that met the walking bar, if any.
+    pub fn first_walk(&self) -> Option<&CheckRecord> {
+        self.state.check.as_ref()?.first_walk.as_ref()
+    }
+
+    /// The walking check of the policy `RUN/best/` holds, if the run checks its policies.
+    pub fn kept_check(&self) -> Option<&CheckRecord> {
+        self.state.check.as_ref()?.kept.as_ref()
     }
 
     /// Runs one row and writes it: the metrics row (with `wall_s`), `RUN/best/` when the row
@@ -186,16 +224,23 @@ impl<L: Learner> Training<L> {
         }
         self.run.append(&value)?;
         let previous_best = self.best();
-        if curve > previous_best {
-            if let Some(agent) = self.learner.scored_agent()? {
-                let info = BestInfo {
-                    generation: self.learner.rows() - 1,
-                    fitness: curve,
-                    env_steps: self.learner.env_steps(),
-                };
-                checkpoint::save_best(&self.root, &agent, &info)?;
+        let check = match &self.checker {
+            Some(_) => self.check_row(curve > previous_best, curve)?,
+            None => {
+                if curve > previous_best {
+                    if let Some(agent) = self.learner.scored_agent()? {
+                        let info = BestInfo {
+                            generation: self.learner.rows() - 1,
+                            fitness: curve,
+                            env_steps: self.learner.env_steps(),
+                            check: None,
+                        };
+                        checkpoint::save_best(&self.root, &agent, &info)?;
+                    }
+                }
+                None
             }
-        }
+        };
         if let Some(every) = self.cfg.best_every_steps {
             // Each multiple of `every` this row's steps reached: `best/` as it stands now.
             let steps = self.learner.env_steps();
@@ -215,7 +260,68 @@ impl<L: Learner> Training<L> {
             curve,
             best: previous_best.max(curve),
             summary: row.summary(),
+            check,
         })
+    }
+
+    /// The walking check after a row (module docs of [`crate::check`]): when the row set a
+    /// new best curve value (`new_best`) or passed a multiple of `every_steps`, checks the
+    /// row's policy — the one that scored its curve value, or the agent itself — keeps it in
+    /// `RUN/best/` if it ranks above the policy there, and logs it to `checks.jsonl`.
+    fn check_row(&mut self, new_best: bool, curve: f64) -> Result<Option<CheckRecord>> {
+        let Some(checker) = &self.checker else {
+            return Ok(None);
+        };
+        let cfg = checker.config();
+        let steps = self.learner.env_steps();
+        let state = self.state.check.get_or_insert_with(CheckState::default);
+        let periodic = steps / cfg.every_steps > state.periodic;
+        let new_best = new_best && cfg.new_best;
+        let trigger = match (new_best, periodic) {
+            (true, true) => Trigger::Both,
+            (true, false) => Trigger::NewBest,
+            (false, true) => Trigger::Periodic,
+            (false, false) => return Ok(None),
+        };
+        if periodic {
+            state.periodic = steps / cfg.every_steps;
+        }
+        let agent = match self.learner.scored_agent()? {
+            Some(agent) => agent,
+            None => self.learner.agent().clone(),
+        };
+        let t = Instant::now();
+        let result = self.pool.install(|| checker.check(&agent))?;
+        let seconds = t.elapsed().as_secs_f64();
+        let state = self.state.check.get_or_insert_with(CheckState::default);
+        let kept = state.kept.as_ref().is_none_or(|k| result.beats(&k.result));
+        state.seconds += seconds;
+        state.env_steps += result.check_steps;
+        let record = CheckRecord {
+            row: self.learner.rows() - 1,
+            env_steps: steps,
+            wall_s: self.wall0 + self.started.elapsed().as_secs_f64(),
+            trigger,
+            result,
+            kept,
+            seconds,
+        };
+        if kept {
+            let info = BestInfo {
+                generation: record.row,
+                fitness: curve,
+                env_steps: steps,
+                check: Some(record.result.clone()),
+            };
+            checkpoint::save_best(&self.root, &agent, &info)?;
+            state.kept = Some(record.clone());
+        }
+        if record.result.at_bar && state.first_walk.is_none() {
+            state.first_walk = Some(record.clone());
+        }
+        append_jsonl(&self.root.join(CHECKS_FILE), &record)?;
+        state.records += 1;
+        Ok(Some(record))
     }
 
     /// Writes the last checkpoint and the summary, `finished` saying whether the budget was
@@ -245,7 +351,13 @@ impl<L: Learner> Training<L> {
             return Ok(());
         }
         let mut learner = Map::new();
-        for (name, value) in self.learner.summary_figures() {
+        let checks = self.state.check.as_ref().map(CheckState::figures);
+        for (name, value) in self
+            .learner
+            .summary_figures()
+            .into_iter()
+            .chain(checks.into_iter().flatten())
+        {
             if let Some(v) = value {
                 learner.insert(name.into(), Value::from(v));
             }

@@ -30,6 +30,7 @@
 //! | [`Stream::Individual`] | `mix(s, 4 + g, i)` (two generations moved, below) |
 //! | [`Stream::Trainer`] | `mix(s, 0x7A, 0)` |
 //! | [`Stream::Perturbation`] | `mix(mix(s, 0xE5, 0), g, i)` |
+//! | [`Stream::CheckReset`] `k` | `mix(s, 2⁶² + 0xC4EC, k)` |
 //! | [`Stream::ActorWeights`] | `31·s + 1` |
 //! | [`Stream::CriticWeights`] `k` | `31·s + 2 + k` |
 //! | [`Stream::Updates`] | `s ⊕ 0x5EED_A6E7` |
@@ -84,6 +85,9 @@ pub enum Stream {
         /// Individual, from 0 (0 is the RL actor).
         index: u64,
     },
+    /// The initial state of start `k` of the walking check (`esrl-run`'s `check`): the same
+    /// starts for every check of a run.
+    CheckReset(u64),
     /// The ES noise εᵢ of individual `index` in generation `generation` (eq. 8).
     Perturbation {
         /// Generation, from 0.
@@ -100,6 +104,8 @@ const WARM_START: u64 = 3;
 const INDIVIDUAL: u64 = 4;
 const TRAINER: u64 = 0x7A;
 const PERTURBATION: u64 = 0xE5;
+/// Above every individual tag a run can reach (4 + g, g < 2⁶²) and below [`MOVED`].
+const CHECK: u64 = (1 << 62) | 0xC4EC;
 /// Where the two generations whose individual tag meets a fixed tag go instead.
 const MOVED: u64 = 1 << 63;
 
@@ -137,6 +143,7 @@ impl Stream {
             Stream::Perturbation { generation, index } => {
                 mix(mix(s, PERTURBATION, 0), generation, index)
             }
+            Stream::CheckReset(k) => mix(s, CHECK, k),
         }
     }
 

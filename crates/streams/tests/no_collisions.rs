@@ -1,6 +1,6 @@
 //! Contract: no two purposes share a seed. For several run seeds, every stream a run can
 //! reach — generations up to 2,000 with 64 individuals and 4 evaluations each, 20,000 plain
-//! episodes, 20,000 warm-start steps, both critics — gets its own seed, and the seeds of the
+//! episodes, 20,000 warm-start steps, 1,000 check starts, both critics — gets its own seed, and the seeds of the
 //! streams named before issue 18 keep their old values (except the two moved generations).
 
 use esrl_streams::{mix, Stream};
@@ -21,6 +21,7 @@ fn streams(evaluations: u64) -> Vec<Stream> {
     ];
     all.extend((0..20_000).map(Stream::EpisodeReset));
     all.extend((0..20_000).map(Stream::WarmStartReset));
+    all.extend((0..1_000).map(Stream::CheckReset));
     for generation in 0..GENERATIONS {
         all.extend((0..evaluations).map(|evaluation| Stream::EvaluationReset {
             generation,

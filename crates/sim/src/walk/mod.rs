@@ -138,6 +138,7 @@
 //! this file holds [`WalkEnv`] and its [`Env`] implementation, which ties them together.
 
 mod config;
+mod mirror;
 mod observation;
 mod reward;
 mod setup;
@@ -150,6 +151,7 @@ pub use config::{
     ActionMode, FallConfig, GaitClock, InitNoise, ResetConfig, ResetPose, RewardConfig,
     TargetGains, UprightGate, WalkConfig,
 };
+pub use mirror::Mirror;
 pub use observation::ObsLayout;
 
 use crate::env::{Env, GaitSample, Step, StepInfo};
@@ -174,6 +176,8 @@ pub struct WalkEnv {
     last_abs_power: Vec<f32>,
     /// Gait-clock phase at reset, drawn from the reset seed (0 without a clock).
     phase0: f32,
+    /// When set, the gait-clock phase of every following reset instead of the seed's draw.
+    start_phase: Option<f32>,
     /// Each foot's contact phase, for the gait clock's chatter term.
     feet: reward::FootPhases,
 }
@@ -219,6 +223,7 @@ impl WalkEnv {
             last_power: vec![0.0; n_a],
             last_abs_power: vec![0.0; n_a],
             phase0: 0.0,
+            start_phase: None,
             feet: reward::FootPhases::reset([false; 2]),
         }
     }
@@ -303,6 +308,12 @@ impl WalkEnv {
         &self.shared.obs_scale
     }
 
+    /// The left↔right mirror of this task's observations and actions ([`Mirror`], module
+    /// `mirror`): an error names the joint or foot without a mirror partner.
+    pub fn mirror(&self) -> Result<Mirror, SimError> {
+        mirror::mirror(&self.shared)
+    }
+
     /// A name for every observation index, e.g. `joint_angle/left_knee`.
     pub fn obs_names(&self) -> Vec<String> {
         let s = &self.shared;
@@ -351,6 +362,15 @@ impl WalkEnv {
             }
             None => 0.0,
         }
+    }
+
+    /// Sets the gait-clock phase φ ∈ [0, 1) that every following [`Env::reset`] starts from
+    /// instead of the one drawn from its seed (the rest of the reset is the seed's, and the
+    /// seed's stream is drawn as before), or, with `None`, goes back to the seed's draw. A
+    /// value outside [0, 1) is wrapped into it. No effect without a gait clock. The walking
+    /// check of `esrl-run` starts its episodes at phases spread over the cycle this way.
+    pub fn set_start_phase(&mut self, phase: Option<f32>) {
+        self.start_phase = phase.map(|p| p.rem_euclid(1.0));
     }
 
     /// The joint angle target of actuated joint `k` for action `a` in `target` mode (module
@@ -459,9 +479,12 @@ impl Env for WalkEnv {
 
     fn reset(&mut self, seed: u64) -> Vec<f32> {
         let s = self.shared.clone();
-        let (state, phase0) = s.initial_state(seed);
+        let (state, drawn) = s.initial_state(seed);
         self.sim = RobotSim::build(s.model.clone(), &s.setup, &state);
-        self.phase0 = phase0;
+        self.phase0 = match (&s.config.gait_clock, self.start_phase) {
+            (Some(_), Some(phase)) => phase,
+            _ => drawn,
+        };
         self.prev_action.fill(0.0);
         self.prev_velocity = self.sim.link_origin_velocity(s.torso);
         self.acceleration = Vector::ZERO;

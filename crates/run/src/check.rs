@@ -1,0 +1,479 @@
+//! The walking check: a deterministic evaluation of a policy from several starts, judged by
+//! the walking bar, run during training to choose the policy a run keeps (`RUN/best/`) and to
+//! time the first policy that walks.
+//!
+//! One check runs `starts` deterministic episodes (tanh μ, no exploration) of the run's own
+//! walking task. Start `k` resets with the seed of [`Stream::CheckReset`]`(k)` and, when the
+//! task has a gait clock, at clock phase `(k + ½) / starts`, so the starts cover the gait
+//! cycle evenly (a policy that falls when started mid-swing shows it). Each episode is
+//! classified by the gait metrics of `esrl-metrics` (walk, run, hop, shuffle, stand, fall);
+//! the check counts the episodes that reach the end of the track, that fall, and of each
+//! class, and the mean forward speed and distance.
+//!
+//! **The walking bar** ([`CheckConfig::finish_share`], [`CheckConfig::walk_share`]): at least
+//! 80 % of the starts reach the 50 m line and more than half of the episodes are classified
+//! `walk` (the bar the walking recipe is judged by: `walk` in most episodes, 50 m from ≥ 8 of
+//! 10 starts).
+//!
+//! **Choosing the kept policy.** Checks are ranked by ([`CheckResult::score`]): at the bar
+//! first, then starts finished, then fewer falls, then episodes classified `walk`, then mean
+//! distance. With a check configured, `RUN/best/` holds the best-ranked policy checked so far
+//! instead of the one with the highest learning-curve value: a policy that scores one sampled
+//! rollout higher but falls from more starts, or shuffles, is not kept over one that walks.
+//! Candidates are each row whose learning-curve value is the highest so far
+//! ([`CheckConfig::new_best`]; for the hybrid loop the generation's best individual) and,
+//! every [`CheckConfig::every_steps`] environment steps, the policy of the latest row (so a
+//! walk that appears after an early high score is still seen).
+//!
+//! The check draws nothing from the run's other streams and changes nothing the learner
+//! does: a run learns the same with or without it, and only which policy `RUN/best/` keeps,
+//! the rows of `checks.jsonl` and the summary's `steps_to_walk` differ.
+
+use crate::error::{Context, Result};
+use esrl_agents::{ActMode, Agent};
+use esrl_metrics::{gait_metrics, GaitClass, GaitOptions, GaitStep, GaitTrace};
+use esrl_sim::{run_episode, Env, GaitSample, RobotModel, Step, WalkConfig, WalkEnv};
+use esrl_streams::Stream;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// How a run checks its policies against the walking bar (`[check]` in `config.toml`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CheckConfig {
+    /// Deterministic episodes per check, start `k` at gait-clock phase `(k + ½)/starts`.
+    /// Default 10 (the walking bar's 10 starts).
+    pub starts: usize,
+    /// Check the policy of the latest row every this many environment steps. Default
+    /// 100,000 (about a minute of training on 2 cores; the walking recipe's walks appear
+    /// between 1.5 and 2.9 M steps).
+    pub every_steps: u64,
+    /// Also check the policy of every row whose learning-curve value is the highest so far.
+    /// Default true.
+    pub new_best: bool,
+    /// The bar's share of starts that must reach the end of the track. Default 0.8 (8 of 10).
+    pub finish_share: f64,
+    /// The bar's share of episodes that must be classified `walk`: more than this. Default
+    /// 0.5 (most episodes).
+    pub walk_share: f64,
+}
+
+impl Default for CheckConfig {
+    fn default() -> Self {
+        Self {
+            starts: 10,
+            every_steps: 100_000,
+            new_best: true,
+            finish_share: 0.8,
+            walk_share: 0.5,
+        }
+    }
+}
+
+/// Most starts a check may run (each is a whole episode).
+pub const MAX_STARTS: usize = 1000;
+
+impl CheckConfig {
+    /// Checks every field, naming the first that cannot work.
+    pub fn validate(&self) -> Result<()> {
+        if self.starts == 0 || self.starts > MAX_STARTS {
+            crate::bail!(
+                "check.starts = {}: must be in 1..={MAX_STARTS}",
+                self.starts
+            );
+        }
+        if self.every_steps == 0 {
+            crate::bail!("check.every_steps = 0: must be ≥ 1");
+        }
+        for (name, v) in [
+            ("finish_share", self.finish_share),
+            ("walk_share", self.walk_share),
+        ] {
+            if !(v.is_finite() && (0.0..=1.0).contains(&v)) {
+                crate::bail!("check.{name} = {v}: must be in [0, 1]");
+            }
+        }
+        Ok(())
+    }
+
+    /// The gait-clock phase of start `k`: `(k + ½) / starts`.
+    pub fn phase(&self, k: usize) -> f32 {
+        ((k as f64 + 0.5) / self.starts as f64) as f32
+    }
+}
+
+/// What one check found.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CheckResult {
+    /// Episodes run.
+    pub starts: usize,
+    /// Episodes that reached the end of the track.
+    pub finished: usize,
+    /// Episodes that fell.
+    pub falls: usize,
+    /// Episodes per gait class.
+    pub classes: BTreeMap<GaitClass, usize>,
+    /// Mean forward speed of the torso over the episodes, m/s.
+    pub mean_forward_velocity: f64,
+    /// Mean distance covered along the track, m.
+    pub mean_distance: f64,
+    /// Mean track time of the episodes that reached the end of the track, s.
+    pub track_time: Option<f64>,
+    /// Whether the policy meets the walking bar.
+    pub at_bar: bool,
+    /// Environment steps the check simulated.
+    pub check_steps: u64,
+}
+
+impl CheckResult {
+    /// Episodes classified `class`.
+    pub fn count(&self, class: GaitClass) -> usize {
+        self.classes.get(&class).copied().unwrap_or(0)
+    }
+
+    /// The rank key (module docs): at the bar, finished, −falls, walks, mean distance.
+    pub fn score(&self) -> (bool, usize, std::cmp::Reverse<usize>, usize, f64) {
+        (
+            self.at_bar,
+            self.finished,
+            std::cmp::Reverse(self.falls),
+            self.count(GaitClass::Walk),
+            self.mean_distance,
+        )
+    }
+
+    /// Whether this result ranks above `other` (ties keep `other`).
+    pub fn beats(&self, other: &CheckResult) -> bool {
+        self.score().partial_cmp(&other.score()) == Some(std::cmp::Ordering::Greater)
+    }
+
+    /// "walk 9, run 1; 10/10 finished, 0 falls, 1.09 m/s".
+    pub fn describe(&self) -> String {
+        let mut classes: Vec<(GaitClass, usize)> =
+            self.classes.iter().map(|(c, n)| (*c, *n)).collect();
+        classes.sort_by(|a, b| b.1.cmp(&a.1).then(b.0.cmp(&a.0)));
+        let classes = classes
+            .iter()
+            .map(|(c, n)| format!("{} {n}", c.name()))
+            .collect::<Vec<_>>()
+            .join(", ");
+        format!(
+            "{classes}; {}/{} finished, {} falls, {:.2} m/s{}",
+            self.finished,
+            self.starts,
+            self.falls,
+            self.mean_forward_velocity,
+            if self.at_bar { " (at the bar)" } else { "" }
+        )
+    }
+}
+
+/// Runs checks of policies on one walking task.
+#[derive(Clone)]
+pub struct Checker {
+    config: CheckConfig,
+    model: Arc<RobotModel>,
+    walk: WalkConfig,
+    seed: u64,
+}
+
+impl Checker {
+    /// A checker for the walking task `walk` on `model`, in the run with seed `seed`.
+    pub fn new(config: CheckConfig, model: Arc<RobotModel>, walk: WalkConfig, seed: u64) -> Self {
+        Self {
+            config,
+            model,
+            walk,
+            seed,
+        }
+    }
+
+    /// Its settings.
+    pub fn config(&self) -> &CheckConfig {
+        &self.config
+    }
+
+    /// Checks `agent`'s deterministic policy from every start, in parallel on the calling
+    /// rayon pool (the result does not depend on the thread count).
+    pub fn check(&self, agent: &Agent) -> Result<CheckResult> {
+        let starts = self.config.starts;
+        let episodes: Vec<Start> = (0..starts)
+            .into_par_iter()
+            .map(|k| self.episode(agent, k))
+            .collect::<Result<_>>()?;
+        let mut classes = BTreeMap::new();
+        for e in &episodes {
+            *classes.entry(e.class).or_insert(0) += 1;
+        }
+        let times: Vec<f64> = episodes.iter().filter_map(|e| e.track_time).collect();
+        let finished = times.len();
+        let n = starts as f64;
+        let walks = classes.get(&GaitClass::Walk).copied().unwrap_or(0);
+        Ok(CheckResult {
+            starts,
+            finished,
+            falls: episodes.iter().filter(|e| e.fell).count(),
+            mean_forward_velocity: episodes.iter().map(|e| e.speed).sum::<f64>() / n,
+            mean_distance: episodes.iter().map(|e| e.distance).sum::<f64>() / n,
+            track_time: (!times.is_empty()).then(|| times.iter().sum::<f64>() / times.len() as f64),
+            at_bar: finished as f64 >= self.config.finish_share * n - 1e-9
+                && walks as f64 > self.config.walk_share * n,
+            check_steps: episodes.iter().map(|e| e.steps).sum(),
+            classes,
+        })
+    }
+
+    /// Start `k`: one deterministic episode, judged.
+    fn episode(&self, agent: &Agent, k: usize) -> Result<Start> {
+        let mut env = WalkEnv::from_model(self.model.clone(), self.walk.clone())
+            .context("building the walking environment of the check")?;
+        env.set_start_phase(Some(self.config.phase(k)));
+        let seed = Stream::CheckReset(k as u64).seed(self.seed);
+        let mut policy = agent.policy();
+        policy.reset();
+        // Deterministic actions draw nothing; the stream only satisfies the signature.
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut log = GaitLog::new(&env);
+        let mut hook = esrl_sim::hooks(
+            |obs: &[f32], action: &mut [f32]| {
+                policy.act(obs, ActMode::Deterministic, &mut rng, action)
+            },
+            |env: &WalkEnv, _: &[f32], _: &[f32], step: &Step| {
+                log.observe(env, step);
+                Ok::<(), std::convert::Infallible>(())
+            },
+        );
+        let limit = env.max_episode_steps().max(1);
+        let end = match run_episode(&mut env, seed, Some(limit), &mut hook) {
+            Ok(end) => end,
+            Err(never) => match never {},
+        };
+        let trace = log.finish();
+        let steps = end.steps as u64;
+        if trace.is_empty() {
+            // Not one finite sample: the simulation failed at once, which the task calls a
+            // fall.
+            return Ok(Start {
+                class: GaitClass::Fall,
+                track_time: None,
+                fell: true,
+                speed: 0.0,
+                distance: 0.0,
+                steps,
+            });
+        }
+        let track = f64::from(self.walk.track_length);
+        let g = gait_metrics(&trace, &gait_options(&trace.actuator_names, track))
+            .context("computing the gait metrics of a check")?;
+        Ok(Start {
+            class: g.cycle.as_ref().map_or(GaitClass::Fall, |c| c.gait_class),
+            track_time: g.track_time,
+            fell: g.fell,
+            speed: g.mean_forward_velocity,
+            distance: g.distance,
+            steps,
+        })
+    }
+}
+
+/// One start of a check, judged.
+struct Start {
+    class: GaitClass,
+    track_time: Option<f64>,
+    fell: bool,
+    speed: f64,
+    distance: f64,
+    steps: u64,
+}
+
+/// Every step's [`GaitSample`] of a walking episode gathered into a [`GaitTrace`], with the
+/// feet's link-origin positions and the model's joint limits: what the gait metrics read.
+/// Samples with a non-finite value (a simulation that blew up on its last step; the
+/// environment then reports a fall) are left out.
+pub struct GaitLog {
+    trace: GaitTrace,
+    feet: Vec<usize>,
+}
+
+impl GaitLog {
+    /// An empty log for episodes of `env`.
+    pub fn new(env: &WalkEnv) -> Self {
+        let mut trace = GaitTrace::new(
+            env.actuated_joint_names().to_vec(),
+            env.config().foot_links.to_vec(),
+        );
+        let model = env.model();
+        trace.joint_limits = trace
+            .actuator_names
+            .iter()
+            .map(|n| model.joint_index(n).and_then(|j| model.joints()[j].limits))
+            .collect();
+        // `WalkEnv` refuses foot links the model lacks, so both are found.
+        let feet = env
+            .config()
+            .foot_links
+            .iter()
+            .filter_map(|n| model.link_index(n))
+            .collect();
+        Self { trace, feet }
+    }
+
+    /// Logs the step just taken (`env` after it). Returns whether a sample was kept.
+    pub fn observe(&mut self, env: &WalkEnv, step: &Step) -> bool {
+        let Some(g) = &step.info.gait else {
+            return false;
+        };
+        if g.fell {
+            self.trace.fell = true;
+        }
+        let poses = env.link_poses();
+        let foot_positions: Vec<[f64; 2]> = self
+            .feet
+            .iter()
+            .map(|&l| poses[l].translation.map(f64::from))
+            .map(|p| [p[0], p[1]])
+            .collect();
+        let feet_finite = foot_positions.iter().flatten().all(|v| v.is_finite());
+        if !(finite_sample(g) && feet_finite) {
+            return false;
+        }
+        let f64s = |v: &[f32]| v.iter().map(|&x| f64::from(x)).collect::<Vec<f64>>();
+        self.trace.push(&GaitStep {
+            time: f64::from(g.time),
+            torso_x: f64::from(g.torso_position[0]),
+            torso_y: f64::from(g.lateral_offset),
+            torso_z_error: f64::from(g.height_error),
+            forward_velocity: f64::from(g.forward_velocity),
+            torques: &f64s(&g.joint_torque),
+            powers: &f64s(&g.joint_abs_power),
+            foot_forces: &f64s(&g.foot_force),
+            joint_angles: &f64s(&g.joint_angle),
+            foot_positions: &foot_positions,
+        });
+        if g.success && self.trace.success_time.is_none() {
+            self.trace.success_time = Some(f64::from(g.time));
+        }
+        true
+    }
+
+    /// The trace.
+    pub fn finish(self) -> GaitTrace {
+        self.trace
+    }
+}
+
+fn finite_sample(g: &GaitSample) -> bool {
+    let scalars = [
+        g.time,
+        g.forward_velocity,
+        g.lateral_offset,
+        g.height_error,
+        g.torso_position[0],
+    ];
+    scalars
+        .iter()
+        .chain(&g.joint_torque)
+        .chain(&g.joint_power)
+        .chain(&g.foot_force)
+        .chain(&g.joint_angle)
+        .all(|v| v.is_finite())
+}
+
+/// Gait options for these actuators on a track of `track_length` m: the default knee names
+/// if present, else the actuators whose names contain `knee` and `left` / `right`.
+pub fn gait_options(actuators: &[String], track_length: f64) -> GaitOptions {
+    let mut o = GaitOptions {
+        track_length,
+        ..GaitOptions::default()
+    };
+    let find = |side: &str| {
+        actuators
+            .iter()
+            .find(|n| {
+                let n = n.to_ascii_lowercase();
+                n.contains("knee") && n.contains(side)
+            })
+            .cloned()
+    };
+    if !actuators.contains(&o.left_knee) {
+        if let Some(n) = find("left") {
+            o.left_knee = n;
+        }
+    }
+    if !actuators.contains(&o.right_knee) {
+        if let Some(n) = find("right") {
+            o.right_knee = n;
+        }
+    }
+    o
+}
+
+/// Why a policy was checked.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Trigger {
+    /// Its row's learning-curve value was the highest so far.
+    NewBest,
+    /// The run passed a multiple of [`CheckConfig::every_steps`].
+    Periodic,
+    /// Both at once.
+    Both,
+}
+
+/// One line of `RUN/checks.jsonl`: which policy was checked, when, why, what the check found
+/// and whether `RUN/best/` took it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CheckRecord {
+    /// The row (generation or episode, from 0) whose policy was checked.
+    pub row: usize,
+    /// Training environment steps by the end of that row.
+    pub env_steps: u64,
+    /// Training seconds by the end of that row (earlier checks included).
+    pub wall_s: f64,
+    /// Why it was checked.
+    pub trigger: Trigger,
+    /// What the check found.
+    #[serde(flatten)]
+    pub result: CheckResult,
+    /// Whether `RUN/best/` took this policy (it ranked above every policy checked before).
+    pub kept: bool,
+    /// Seconds the check took.
+    pub seconds: f64,
+}
+
+/// The checks of a run so far, as its checkpoint keeps them.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct CheckState {
+    /// Lines of `checks.jsonl` (later ones are dropped on resume).
+    pub records: usize,
+    /// Seconds spent checking.
+    pub seconds: f64,
+    /// Environment steps the checks simulated (not counted in the run's budget).
+    pub env_steps: u64,
+    /// The multiple of [`CheckConfig::every_steps`] last checked.
+    pub periodic: u64,
+    /// The check of the policy `RUN/best/` holds.
+    pub kept: Option<CheckRecord>,
+    /// The first check that met the walking bar.
+    pub first_walk: Option<CheckRecord>,
+}
+
+impl CheckState {
+    /// Figures for `summary.json`: `steps_to_walk`, `time_to_walk_s` and `row_to_walk` (the
+    /// first policy at the bar; absent before one), `checks`, `check_s`, `check_env_steps`.
+    pub fn figures(&self) -> Vec<(&'static str, Option<f64>)> {
+        let first = self.first_walk.as_ref();
+        vec![
+            ("steps_to_walk", first.map(|r| r.env_steps as f64)),
+            ("time_to_walk_s", first.map(|r| r.wall_s)),
+            ("row_to_walk", first.map(|r| r.row as f64)),
+            ("checks", Some(self.records as f64)),
+            ("check_s", Some(self.seconds)),
+            ("check_env_steps", Some(self.env_steps as f64)),
+        ]
+    }
+}

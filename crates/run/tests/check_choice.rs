@@ -1,0 +1,159 @@
+//! Contract: with a walking check, `RUN/best/` keeps the policy the check ranks highest, not
+//! the one with the highest learning-curve value. Two candidates: the later one scores the
+//! higher (sampled) return but falls from more starts; the kept policy is the earlier one.
+//! Without a check the same rows keep the later one, so the test can tell the two rules
+//! apart.
+
+use esrl_agents::{Agent, AgentError, EpisodeReport, Learner, ReplayBuffer, Trainer, TrainerState};
+use esrl_run::check::{CheckConfig, CheckRecord};
+use esrl_run::checkpoint::{BestInfo, BEST, BEST_INFO};
+use esrl_run::training::CHECKS_FILE;
+use esrl_run::{build, AgentKind, EnvKind, Preset, TrainConfig, Training};
+use esrl_sim::MakeEnv;
+use std::collections::HashMap;
+
+/// A learner whose rows are given: each row's curve value and the actor genome that scored
+/// it. Everything a checkpoint needs comes from an inner trainer.
+struct Scripted {
+    inner: Trainer,
+    rows: Vec<(f64, Vec<f32>)>,
+    done: usize,
+}
+
+impl Learner for Scripted {
+    type Row = EpisodeReport;
+    type Own = ();
+    const UNIT: &'static str = "episode";
+
+    fn run_row(&mut self, _envs: &MakeEnv) -> Result<EpisodeReport, AgentError> {
+        let (curve, _) = &self.rows[self.done];
+        self.done += 1;
+        Ok(EpisodeReport {
+            episode: self.done - 1,
+            env_steps: self.done as u64 * 10,
+            curve: *curve,
+            ret: *curve,
+            length: 10,
+            terminated: false,
+            q0: 0.0,
+            critic_loss: None,
+            actor_loss: None,
+            alpha: None,
+            updates: 0,
+        })
+    }
+
+    fn rows(&self) -> usize {
+        self.done
+    }
+
+    fn env_steps(&self) -> u64 {
+        self.done as u64 * 10
+    }
+
+    fn agent(&self) -> &Agent {
+        self.inner.agent()
+    }
+
+    fn buffer(&self) -> &ReplayBuffer {
+        self.inner.buffer()
+    }
+
+    fn scored_agent(&self) -> Result<Option<Agent>, AgentError> {
+        let mut agent = self.inner.agent().clone();
+        agent.set_genome(&self.rows[self.done - 1].1)?;
+        Ok(Some(agent))
+    }
+
+    fn state(&self) -> TrainerState {
+        self.inner.state()
+    }
+
+    fn tensors(&self) -> Vec<(String, Vec<f32>)> {
+        self.inner.agent().state_tensors()
+    }
+
+    fn check(&self, _: &TrainerState, _: usize) -> Result<(), AgentError> {
+        Ok(())
+    }
+
+    fn restore(
+        &mut self,
+        _: TrainerState,
+        _: &HashMap<String, Vec<f32>>,
+        _: ReplayBuffer,
+    ) -> Result<(), AgentError> {
+        Ok(())
+    }
+}
+
+/// The walking preset on 3 s episodes with full-range targets (±1 reach the joint limits),
+/// checked from 4 starts; `check` off gives the curve rule.
+fn config(check: bool) -> TrainConfig {
+    let mut cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::Walking);
+    cfg.walk.episode_seconds = 3.0;
+    cfg.walk.target.range = None;
+    cfg.threads = 2;
+    cfg.checkpoint_every = 1000;
+    cfg.check = check.then(|| CheckConfig {
+        starts: 4,
+        every_steps: 1_000_000,
+        ..CheckConfig::default()
+    });
+    cfg
+}
+
+/// Trains the two scripted rows into a fresh folder; returns `best.json` and the check log.
+fn train(check: bool) -> (BestInfo, Vec<CheckRecord>) {
+    let cfg = config(check);
+    let envs = build::envs(cfg.env, &cfg.walk).unwrap();
+    let agent = build::agent(&cfg, &envs).unwrap();
+    let n = agent.genome_len();
+    // A zero actor holds the standing pose (action 0 is the standing target); an actor of
+    // all 0.05 drives every joint towards its upper limit and falls.
+    let stands = vec![0.0f32; n];
+    let falls = vec![0.05f32; n];
+    let learner = Scripted {
+        inner: Trainer::new(agent, cfg.seed),
+        rows: vec![(1.0, stands), (5.0, falls)],
+        done: 0,
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("run");
+    let (mut t, _) = Training::open(&cfg, &root, learner, envs.make.clone(), false).unwrap();
+    t.step().unwrap();
+    t.step().unwrap();
+    let best: BestInfo =
+        serde_json::from_str(&std::fs::read_to_string(root.join(BEST).join(BEST_INFO)).unwrap())
+            .unwrap();
+    let log = std::fs::read_to_string(root.join(CHECKS_FILE)).unwrap_or_default();
+    let records = log
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    (best, records)
+}
+
+#[test]
+fn the_check_keeps_the_policy_that_falls_less_over_the_higher_return() {
+    let (best, checks) = train(true);
+    assert_eq!(checks.len(), 2, "both rows set a new best curve value");
+    let (first, second) = (&checks[0].result, &checks[1].result);
+    assert!(
+        second.falls > first.falls,
+        "the scripted policies must differ in falls: {} vs {}",
+        first.describe(),
+        second.describe()
+    );
+    assert!(checks[0].kept && !checks[1].kept);
+    assert_eq!(best.generation, 0, "best/ keeps the policy that falls less");
+    assert_eq!(best.check.as_ref(), Some(first));
+}
+
+#[test]
+fn without_a_check_the_higher_return_is_kept() {
+    let (best, checks) = train(false);
+    assert!(checks.is_empty());
+    assert_eq!(best.generation, 1);
+    assert_eq!(best.check, None);
+}
