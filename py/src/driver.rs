@@ -107,7 +107,8 @@ fn parse_name<T>(
 /// Resolves a `train` command as `esrl train` does.
 #[pyfunction]
 #[pyo3(signature = (agent, *, seed=None, out=None, resume=None, preset=None, config=None,
-    env=None, urdf=None, threads=None, generations=None, episodes=None, steps=None))]
+    env=None, urdf=None, threads=None, generations=None, episodes=None, steps=None,
+    until=None))]
 #[allow(clippy::too_many_arguments)]
 fn plan_train(
     py: Python<'_>,
@@ -123,6 +124,7 @@ fn plan_train(
     generations: Option<usize>,
     episodes: Option<usize>,
     steps: Option<u64>,
+    until: Option<&str>,
 ) -> PyResult<PyTrainPlan> {
     let agents: Vec<&str> = AgentKind::ALL.iter().map(|a| a.name()).collect();
     let presets: Vec<&str> = Preset::ALL.iter().map(|p| p.name()).collect();
@@ -135,6 +137,16 @@ fn plan_train(
     let env = env
         .map(|e| parse_name("env", e, EnvKind::parse, &envs))
         .transpose()?;
+    let stop_at_walk = match until {
+        None => None,
+        Some("walk") => Some(true),
+        Some("budget") => Some(false),
+        Some(other) => {
+            return Err(value_error(format!(
+                "until={other:?}: must be \"walk\" or \"budget\""
+            )))
+        }
+    };
     let request = TrainRequest {
         agent,
         seed,
@@ -149,6 +161,7 @@ fn plan_train(
             generations,
             episodes,
             steps,
+            stop_at_walk,
         },
     };
     let plan = py.detach(|| esrl_run::plan(&request)).map_err(run_error)?;

@@ -7,8 +7,9 @@
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::Mutex;
 
+use esrl_eval::render_rgb;
 use esrl_sim::{Env, Pendulum, WalkConfig, WalkEnv};
-use numpy::{AllowTypeChange, PyArray1, PyArrayLike1};
+use numpy::{AllowTypeChange, PyArray1, PyArray3, PyArrayLike1};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -16,11 +17,34 @@ use crate::convert::json_to_py;
 use crate::errors::{esrl_error, panic_message, sim_error, value_error};
 use crate::metrics::from_py;
 
+/// The Rust environment.
+enum Sim {
+    Walk(Box<WalkEnv>),
+    Pendulum(Pendulum),
+}
+
 /// The Rust environment and whether it may step.
 struct Task {
-    env: Box<dyn Env>,
-    /// Needs a reset before stepping (new, or after a caught panic).
+    sim: Sim,
+    /// Needs a reset before stepping (new, after the episode ended, or after a caught
+    /// panic).
     needs_reset: bool,
+}
+
+impl Task {
+    fn new(sim: Sim) -> Self {
+        Self {
+            sim,
+            needs_reset: true,
+        }
+    }
+
+    fn env(&mut self) -> &mut dyn Env {
+        match &mut self.sim {
+            Sim::Walk(w) => w.as_mut(),
+            Sim::Pendulum(p) => p,
+        }
+    }
 }
 
 /// One environment. Thread-safe (a `Mutex` around the Rust env); the GIL is released while
@@ -67,9 +91,11 @@ impl EnvCore {
 
     fn failure(&self, what: &str, f: StepFailure) -> PyErr {
         match f {
-            StepFailure::NeedsReset => {
-                esrl_error(format!("{}: call reset() before step()", self.name))
-            }
+            StepFailure::NeedsReset => esrl_error(format!(
+                "{}: call reset() before step() (the environment is new, or its episode \
+                 ended: terminated or truncated)",
+                self.name
+            )),
             StepFailure::Poisoned => esrl_error(format!(
                 "{} environment is poisoned by an earlier panic",
                 self.name
@@ -104,10 +130,7 @@ impl EnvCore {
             action_names: env.actuated_joint_names().to_vec(),
             effort_limits: env.effort_limits().to_vec(),
             config: json,
-            task: Mutex::new(Task {
-                env: Box::new(env),
-                needs_reset: true,
-            }),
+            task: Mutex::new(Task::new(Sim::Walk(Box::new(env)))),
         })
     }
 
@@ -125,10 +148,7 @@ impl EnvCore {
             action_names: vec!["torque".into()],
             effort_limits: vec![esrl_sim::pendulum::MAX_TORQUE as f32],
             config: serde_json::Value::Object(Default::default()),
-            task: Mutex::new(Task {
-                env: Box::new(env),
-                needs_reset: true,
-            }),
+            task: Mutex::new(Task::new(Sim::Pendulum(env))),
         }
     }
 
@@ -191,7 +211,7 @@ impl EnvCore {
         let obs = py
             .detach(|| {
                 let mut task = self.lock()?;
-                let obs = guarded(|| task.env.reset(seed)).map_err(StepFailure::Panic)?;
+                let obs = guarded(|| task.env().reset(seed)).map_err(StepFailure::Panic)?;
                 task.needs_reset = false;
                 Ok(obs)
             })
@@ -221,10 +241,16 @@ impl EnvCore {
                 if task.needs_reset {
                     return Err(StepFailure::NeedsReset);
                 }
-                guarded(|| task.env.step(&action)).map_err(|m| {
+                let step = guarded(|| task.env().step(&action)).map_err(|m| {
                     task.needs_reset = true;
                     StepFailure::Panic(m)
-                })
+                })?;
+                // Gymnasium: after `terminated` or `truncated` the episode is over; stepping
+                // on would simulate a fallen robot past its episode.
+                if step.terminated || step.truncated {
+                    task.needs_reset = true;
+                }
+                Ok(step)
             })
             .map_err(|f| self.failure("step", f))?;
         let info = PyDict::new(py);
@@ -252,6 +278,46 @@ impl EnvCore {
                 info.into_any(),
             ],
         )
+    }
+
+    /// The walking robot seen from the side now: an RGB image `(height, width, 3)` of uint8,
+    /// `metres` of the world high, the camera following the torso
+    /// (`esrl_eval::render_rgb`). The pendulum has no picture (`ValueError`).
+    #[pyo3(signature = (width = 480, height = 360, metres = 2.4))]
+    fn render<'py>(
+        &self,
+        py: Python<'py>,
+        width: usize,
+        height: usize,
+        metres: f64,
+    ) -> PyResult<Bound<'py, PyArray3<u8>>> {
+        if width == 0 || height == 0 || width > 4096 || height > 4096 {
+            return Err(value_error(format!(
+                "render size {width} × {height}: each side must be in 1..=4096"
+            )));
+        }
+        if !(metres.is_finite() && metres > 0.0) {
+            return Err(value_error(format!("metres = {metres}: must be > 0")));
+        }
+        let pixels = py
+            .detach(|| {
+                let mut task = self.lock()?;
+                match &mut task.sim {
+                    Sim::Walk(w) => Ok(Some(render_rgb(
+                        &w.geometry(),
+                        &w.link_poses(),
+                        width,
+                        height,
+                        metres,
+                    ))),
+                    Sim::Pendulum(_) => Ok(None),
+                }
+            })
+            .map_err(|f| self.failure("render", f))?
+            .ok_or_else(|| value_error("the pendulum has no picture (render is for the walk)"))?;
+        let array = numpy::ndarray::Array3::from_shape_vec((height, width, 3), pixels)
+            .map_err(|e| value_error(e.to_string()))?;
+        Ok(PyArray3::from_owned_array(py, array))
     }
 }
 

@@ -369,7 +369,7 @@ impl<E: Env + ?Sized> EpisodeHook<E> for Learning<'_> {
         t.env_steps += 1;
         let cfg = t.agent.config();
         if let LearnEvery::Steps(n) = cfg.learn_every {
-            if t.warmed_up() && t.env_steps % n as u64 == 0 {
+            if t.warmed_up() && t.env_steps.is_multiple_of(n as u64) {
                 for _ in 0..cfg.updates_per_learn {
                     self.losses.add(&t.update()?);
                 }

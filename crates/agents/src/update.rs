@@ -188,7 +188,7 @@ impl Agent {
         let part = self.trained_part(batch);
         let st = self.burn_in(batch);
         let mut chunks = Chunk::split(part, st, self.cfg.batch_chunks);
-        let actor_due = self.updates % self.rules.policy_delay == 0;
+        let actor_due = self.updates.is_multiple_of(self.rules.policy_delay);
         let td_noise = self.chunk_noise(&chunks, self.draws_target_noise());
         let actor_noise = actor_due.then(|| self.chunk_noise(&chunks, self.has_entropy()));
         let actor = &self.actor;

@@ -123,8 +123,20 @@ pub struct TrainArgs {
 /// `esrl eval`.
 #[derive(Debug, Args)]
 pub struct EvalArgs {
-    /// A run folder or a checkpoint folder.
+    /// A run folder (its kept policy, RUN/best/, when it has one; else its last checkpoint),
+    /// or a checkpoint or best/ folder.
     pub path: PathBuf,
+    /// Evaluate a run folder's last checkpoint instead of its kept policy (RUN/best/).
+    #[arg(long)]
+    pub last: bool,
+    /// Where to write the report [default: eval.json beside the policy: RUN/best/eval.json,
+    /// RUN/eval.json for the last checkpoint].
+    #[arg(long, value_name = "FILE.json")]
+    pub out: Option<PathBuf>,
+    /// Replace the report file if it exists (it is never replaced otherwise when --out is
+    /// given).
+    #[arg(long)]
+    pub force: bool,
     /// Deterministic rollouts to run (each with its own seeded initial perturbation).
     #[arg(long, default_value_t = 1)]
     pub episodes: usize,
@@ -137,6 +149,11 @@ pub struct EvalArgs {
     /// Also write one MCAP recording per episode into this folder.
     #[arg(long, value_name = "DIR")]
     pub record: Option<PathBuf>,
+    /// Episodes (the first ones) whose per-step trace (path, contacts, joint angles, side
+    /// view; ≈ 0.4 MB per 60 s walking episode) the report keeps for figures; the others
+    /// keep their metrics.
+    #[arg(long, default_value_t = 10)]
+    pub traces: usize,
 }
 
 /// `esrl compare`.
@@ -174,11 +191,20 @@ pub struct CompareArgs {
 /// `esrl record`.
 #[derive(Debug, Args)]
 pub struct RecordArgs {
-    /// A run folder or a checkpoint folder.
+    /// A run folder (its kept policy, RUN/best/, when it has one; else its last checkpoint),
+    /// or a checkpoint or best/ folder.
     pub path: PathBuf,
-    /// The MCAP file to write.
-    #[arg(long, value_name = "FILE.mcap")]
+    /// Record a run folder's last checkpoint instead of its kept policy (RUN/best/).
+    #[arg(long)]
+    pub last: bool,
+    /// The file to write: FILE.mcap (for Foxglove) or FILE.svg (an animated side view that
+    /// any browser plays).
+    #[arg(long, value_name = "FILE.mcap|FILE.svg")]
     pub out: PathBuf,
+    /// Replace FILE if it exists (a regular file only; devices, pipes and links are never
+    /// replaced).
+    #[arg(long)]
+    pub force: bool,
     /// Seed of the rollout's initial state.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,

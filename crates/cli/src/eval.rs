@@ -3,22 +3,52 @@
 
 use crate::args::{EnvKind, EvalArgs};
 use anyhow::{bail, Result};
-use esrl_eval::{eval_path, evaluate_and_write, load_run, EvalReport};
+use esrl_eval::{
+    eval_path, evaluate_with, load_run_pick, EvalOptions, EvalReport, LoadedRun, Pick,
+};
 use esrl_metrics::{format_number, gait_classes_text, GaitCycle, GaitMetrics, JointMotion};
+use esrl_run::checkpoint::{BestInfo, BEST_INFO};
+use esrl_run::run_dir::{check_output, write_json_atomic};
 
 /// Runs `esrl eval`.
 pub fn run(args: &EvalArgs) -> Result<()> {
     if args.episodes == 0 {
         bail!("--episodes 0: evaluate at least one episode");
     }
-    let loaded = load_run(&args.path)?;
-    let report = evaluate_and_write(&loaded, args.seed, args.episodes, args.record.as_deref())?;
+    if let Some(out) = &args.out {
+        check_output(out, args.force)?;
+    }
+    let pick = if args.last { Pick::Last } else { Pick::Kept };
+    let loaded = load_run_pick(&args.path, pick)?;
+    eprintln!("evaluating {}", which_policy(&loaded));
+    crate::signals::install();
+    let stop = || crate::signals::requested().is_some();
+    let options = EvalOptions {
+        traces: args.traces,
+        stop: Some(&stop),
+    };
+    let report = evaluate_with(
+        &loaded,
+        args.seed,
+        args.episodes,
+        args.record.as_deref(),
+        &options,
+    )?;
+    if report.episodes.len() < report.requested {
+        eprintln!(
+            "stopped: {} of {} episodes evaluated; the report holds those",
+            report.episodes.len(),
+            report.requested
+        );
+    }
+    let out = args.out.clone().unwrap_or_else(|| eval_path(&loaded));
+    write_json_atomic(&out, &report)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         print!("{}", render_table(&report));
     }
-    eprintln!("wrote {}", eval_path(&loaded).display());
+    eprintln!("wrote {}", out.display());
     if let Some(dir) = &args.record {
         eprintln!(
             "recorded {} episode(s) to {}/episode-NNN.mcap",
@@ -27,6 +57,41 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Which policy `loaded` is, in words: the kept policy `RUN/best/` (with the row and steps
+/// that produced it and how it was chosen), or a checkpoint.
+pub fn which_policy(loaded: &LoadedRun) -> String {
+    let dir = loaded.checkpoint.display();
+    let info = std::fs::read_to_string(loaded.checkpoint.join(BEST_INFO))
+        .ok()
+        .and_then(|t| serde_json::from_str::<BestInfo>(&t).ok());
+    match info {
+        Some(b) => {
+            let how = match &b.check {
+                Some(c) => format!("chosen by the walking check: {}", c.describe()),
+                None => format!("chosen by its training fitness {:.1}", b.fitness),
+            };
+            let other = if loaded.run != loaded.checkpoint {
+                format!(
+                    "; `--last` for the last checkpoint of {}",
+                    loaded.run.display()
+                )
+            } else {
+                String::new()
+            };
+            let unit = if loaded.config.agent.is_hybrid() {
+                "generation"
+            } else {
+                "episode"
+            };
+            format!(
+                "{dir}: the kept policy of {unit} {} ({} env steps), {how}{other}",
+                b.generation, b.env_steps
+            )
+        }
+        None => format!("{dir}: the policy of this checkpoint"),
+    }
 }
 
 fn opt_number(v: Option<f64>) -> String {

@@ -5,6 +5,7 @@ use esrl::args::{Cli, Command};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    esrl_run::set_command(esrl::invocation());
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Train(args) => esrl::train::run(args).map(|_| ()),

@@ -5,14 +5,22 @@
 use crate::args::{EnvKind, RecordArgs};
 use anyhow::{bail, Context, Result};
 use esrl_agents::ActMode;
-use esrl_eval::{load_run, metadata, walk_episode, Recorder};
+use esrl_eval::{animated_svg, load_run_pick, metadata, walk_episode, Pick, Recorder};
+use esrl_run::run_dir::{check_output, write_atomic};
 use esrl_sim::Env;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 /// Runs `esrl record`.
 pub fn run(args: &RecordArgs) -> Result<()> {
-    let loaded = load_run(&args.path)?;
+    check_output(&args.out, args.force)?;
+    let svg = args
+        .out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+    let pick = if args.last { Pick::Last } else { Pick::Kept };
+    let loaded = load_run_pick(&args.path, pick)?;
+    eprintln!("recording {}", crate::eval::which_policy(&loaded));
     if loaded.config.env != EnvKind::Walk {
         bail!(
             "{} is a pendulum run: `esrl record` draws the walking humanoid and needs a walking \
@@ -23,25 +31,39 @@ pub fn run(args: &RecordArgs) -> Result<()> {
     let mut env = loaded
         .walk_env()?
         .context("the walking run has no robot model")?;
-    let mut recorder = Recorder::create(&args.out, &env, metadata(&loaded, args.seed))?;
     let mut policy = loaded.agent.policy();
     policy.reset();
     let mut rng = ChaCha8Rng::seed_from_u64(args.seed);
-    let ep = walk_episode(
-        &mut env,
-        args.seed,
-        |obs, action| policy.act(obs, ActMode::Deterministic, &mut rng, action),
-        |env, action, step| recorder.frame(env, action, step),
-    )?;
-    let skipped = recorder.skipped();
-    let stats = recorder.finish()?;
+    let act =
+        |obs: &[f32], action: &mut [f32]| policy.act(obs, ActMode::Deterministic, &mut rng, action);
+    let (ep, what, skipped) = if svg {
+        let ep = walk_episode(&mut env, args.seed, act, |_, _, _| Ok(()))?;
+        write_atomic(&args.out, animated_svg(&ep.stick, 320.0).as_bytes())?;
+        let what = format!(
+            "{} side-view frames ({:.1} s, an SVG animation: open it in a browser)",
+            ep.stick.frames.len(),
+            ep.stick.time.last().copied().unwrap_or(0.0)
+        );
+        (ep, what, 0)
+    } else {
+        let mut recorder = Recorder::create(&args.out, &env, metadata(&loaded, args.seed))?;
+        let ep = walk_episode(&mut env, args.seed, act, |env, action, step| {
+            recorder.frame(env, action, step)
+        })?;
+        let skipped = recorder.skipped();
+        let stats = recorder.finish()?;
+        let what = format!(
+            "{} steps ({:.2} s simulated), {} messages",
+            stats.frames,
+            stats.frames as f64 * f64::from(env.control_period()),
+            stats.messages
+        );
+        (ep, what, skipped)
+    };
     let r = &ep.rollout;
     eprintln!(
-        "wrote {}: {} steps ({:.2} s simulated), {} messages; return {:.2}, distance {:.2} m, {}",
+        "wrote {}: {what}; return {:.2}, distance {:.2} m, {}",
         args.out.display(),
-        stats.frames,
-        stats.frames as f64 * f64::from(env.control_period()),
-        stats.messages,
         r.ret,
         ep.trace
             .torso_x

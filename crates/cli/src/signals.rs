@@ -39,9 +39,9 @@ fn on_signal(signal: i32) {
         .is_ok()
     {
         eprintln!(
-            "\nesrl: {} received: finishing the current generation/episode, then writing a \
-             checkpoint and exiting. Send it again to quit at once (the work since the last \
-             checkpoint is lost).",
+            "\nesrl: {} received: a training finishes the current generation/episode, writes a \
+             checkpoint and exits; an evaluation reports the episodes done. Send it again to \
+             quit at once (the work since the last checkpoint is lost).",
             name(signal)
         );
     } else {

@@ -93,8 +93,9 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
          budget: {budget}{steps}{typical}\n  \
          run:    {dir} (config.toml, metrics.csv, checkpoint/ every {every} rows)\n  \
          stop:   Ctrl-C or SIGTERM finishes the current {unit}, checkpoints and exits; \
-         continue with `esrl train {agent} --resume {dir}`\n  \
+         continue with `{esrl} train {agent} --resume {dir}`\n  \
          time:   an estimate follows once the first {unit}s are measured",
+        esrl = esrl_run::command(),
         preset = cfg.preset.name(),
         env = cfg.env.name(),
         seed = cfg.seed,
@@ -205,7 +206,9 @@ impl LearnerVisitor for Drive<'_> {
             bar.set_message(format!("{} | best so far {:.1}", row.summary, row.best));
             let elapsed = started.elapsed().as_secs_f64();
             let measured = row.rows - rows_at_start;
-            if !eta_told && display.verbose() && (measured >= 3 || elapsed > 30.0) {
+            // The first rows are no guide (a plain agent's warm start does no updates; a
+            // smoke run ends at once): estimate from at least 10 s of training.
+            if !eta_told && display.verbose() && measured >= 3 && elapsed >= 10.0 {
                 eta_told = true;
                 let left = total.saturating_sub(row.rows);
                 let pace = elapsed / measured as f64;
@@ -278,17 +281,19 @@ impl LearnerVisitor for Drive<'_> {
         if display.verbose() {
             if finished {
                 eprintln!(
-                    "done: {} rows, {} env steps, {} → {}",
+                    "done: {} {unit}s, {} env steps, {} → {}",
                     training.rows(),
                     training.learner().env_steps(),
                     human_duration(training.wall_s()),
                     root.display()
                 );
+                eprint!("{}", closing(cfg, root, &training));
             } else {
                 eprintln!(
-                    "stopped after {} rows; checkpoint written. Continue with: esrl train {} \
+                    "stopped after {} {unit}s; checkpoint written. Continue with: {} train {} \
                      --resume {}",
                     training.rows(),
+                    esrl_run::command(),
                     cfg.agent.name(),
                     root.display()
                 );
@@ -296,6 +301,62 @@ impl LearnerVisitor for Drive<'_> {
         }
         Ok(finished)
     }
+}
+
+/// What a finished run hands over and what to run next: the kept policy and how it was
+/// chosen, when the first walk appeared, and the commands that evaluate and show it.
+fn closing<L: Learner>(cfg: &TrainConfig, root: &Path, training: &Training<L>) -> String {
+    let esrl = esrl_run::command();
+    let dir = root.display();
+    let best = root.join(esrl_run::checkpoint::BEST);
+    let mut out = String::new();
+    match (training.kept_check(), best.is_dir()) {
+        (Some(k), _) => {
+            out += &format!(
+                "  kept:   {dir}/best/ ({} {}, {} env steps): {}\n",
+                L::UNIT,
+                k.row,
+                k.env_steps,
+                k.result.describe()
+            );
+            match training.first_walk() {
+                Some(w) => {
+                    out += &format!(
+                        "  walk:   the first policy at the walking bar came at {} {} ({} env \
+                         steps, {} of training); every check is in {dir}/checks.jsonl\n",
+                        L::UNIT,
+                        w.row,
+                        w.env_steps,
+                        human_duration(w.wall_s)
+                    );
+                }
+                None => {
+                    out += &format!(
+                        "  walk:   no policy met the walking bar (walk in most of {} starts, \
+                         {:.0} % of them past the line); the checks are in \
+                         {dir}/checks.jsonl\n",
+                        cfg.check.as_ref().map_or(10, |c| c.starts),
+                        100.0 * cfg.check.as_ref().map_or(0.8, |c| c.finish_share)
+                    );
+                }
+            }
+        }
+        (None, true) => {
+            out +=
+                &format!("  kept:   {dir}/best/, the policy with the highest training fitness\n");
+        }
+        (None, false) => {}
+    }
+    if cfg.env == EnvKind::Walk {
+        out += &format!(
+            "next:\n  {esrl} eval {dir} --episodes 10            # the kept policy from 10 starts, \
+             gait metrics\n  {esrl} record {dir} --out walk.svg        # watch it in a browser \
+             (walk.mcap for Foxglove)\n"
+        );
+    } else {
+        out += &format!("next:\n  {esrl} eval {dir} --episodes 10\n");
+    }
+    out
 }
 
 fn progress_bar(total: usize, done: usize, display: Display) -> ProgressBar {

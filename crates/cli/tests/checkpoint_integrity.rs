@@ -1,8 +1,8 @@
 //! Contract: a checkpoint is verified before it is trusted. A file edited or corrupted after
 //! it was written (manifest or chunk hash), a `state.json` that contradicts the config or the
 //! metrics, or a `config.toml` changed since the checkpoint is refused with a message naming
-//! it, and nothing in the run folder is lost. Weights that are not finite are refused by
-//! `eval`. Identical content gives byte-identical checkpoint files, and each transition of
+//! it, and nothing in the run folder is lost; so is a checkpoint whose manifest was removed.
+//! `eval` checks the manifest too, and refuses weights that are not finite. Identical content gives byte-identical checkpoint files, and each transition of
 //! the replay buffer is written once, not at every checkpoint.
 
 mod common;
@@ -82,8 +82,20 @@ fn tampered_checkpoints_are_refused() {
         |d| edit_json(&state(d), |v| v["rows"] = 2.into()),
         "state.json does not match its SHA-256",
     );
-    // Without the manifest (as a tamperer would delete it), the contents are still checked.
-    let unsigned = |d: &Path| std::fs::remove_file(d.join("checkpoint/manifest.json")).unwrap();
+    // A checkpoint of this format without its manifest (as a tamperer would delete it) is
+    // refused outright.
+    refused(
+        &base,
+        "manifest",
+        |d| std::fs::remove_file(d.join("checkpoint/manifest.json")).unwrap(),
+        "manifest.json is missing",
+    );
+    // A checkpoint of the format before manifests (version 1) has none: its contents are
+    // still checked.
+    let unsigned = |d: &Path| {
+        std::fs::remove_file(d.join("checkpoint/manifest.json")).unwrap();
+        edit_json(&state(d), |v| v["version"] = 1.into());
+    };
     refused(
         &base,
         "rows-unsigned",
@@ -164,6 +176,18 @@ fn non_finite_weights_are_refused_by_eval() {
         .unwrap();
     actor.data[0] = f32::NAN;
     esrl_nn::save_tensors(&p, &tensors, None).unwrap();
+    // The manifest alone refuses the changed file; give it the new hash so that the
+    // weights themselves are what is refused.
+    let out = esrl(&["eval", run.join("checkpoint").to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("does not match its SHA-256"), "{stderr}");
+    let hash = {
+        use sha2::Digest;
+        format!("{:x}", sha2::Sha256::digest(std::fs::read(&p).unwrap()))
+    };
+    edit_json(&run.join("checkpoint/manifest.json"), |v| {
+        v["sha256"]["agent.safetensors"] = hash.into()
+    });
     let out = esrl(&["eval", run.join("checkpoint").to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "{stderr}");

@@ -54,7 +54,7 @@ fn bad_inputs_fail_cleanly() {
         ckpt.join("agent.safetensors"),
     )
     .unwrap();
-    fails(&["eval", &s(&run)], &["agent.safetensors"]);
+    fails(&["eval", &s(&run), "--last"], &["agent.safetensors"]);
     fails(
         &["record", &s(&ckpt), "--out", &s(&t("y.mcap"))],
         &["agent.safetensors"],
@@ -64,7 +64,7 @@ fn bad_inputs_fail_cleanly() {
 
     // A run that never reached a checkpoint.
     std::fs::remove_dir_all(&ckpt).unwrap();
-    fails(&["eval", &s(&run)], &["no complete checkpoint"]);
+    fails(&["eval", &s(&run), "--last"], &["no complete checkpoint"]);
     assert_eq!(
         std::fs::read_to_string(run.join("config.toml")).unwrap(),
         config,

@@ -57,6 +57,7 @@ fn eval_json_has_every_field_and_agrees_with_its_trace() {
     let out = ok(&[
         "eval",
         r,
+        "--last",
         "--episodes",
         "2",
         "--seed",

@@ -1,7 +1,8 @@
 //! Contract: a training says what it starts before it starts: agent, preset, env, seed, the
-//! budget, the run folder and how to stop and resume; then a pace estimate once measured,
-//! and labelled log lines even with `--no-progress` (the default folder name is
-//! `runs/<agent>-s<seed>`, the one `esrl compare` uses).
+//! budget, the run folder and how to stop and resume; at the end what it did and the
+//! commands that evaluate and show the result. The default folder is `runs/<agent>-s<seed>`
+//! for the default preset and `runs/<agent>-<preset>-s<seed>` for another, so the quick
+//! start's commands never share one.
 
 mod common;
 
@@ -35,16 +36,41 @@ fn banner_names_the_run_budget_folder_and_how_to_stop() {
         &format!("run:    {o}"),
         "Ctrl-C or SIGTERM",
         &format!("esrl train es-sac --resume {o}"),
-        "pace:",
-        "done: 4 rows",
+        "done: 4 generations",
+        &format!("eval {o} --episodes 10"),
+        &format!("record {o} --out walk.svg"),
     ] {
         assert!(stderr.contains(want), "missing {want:?} in:\n{stderr}");
     }
 }
 
 #[test]
-fn default_run_folder_is_agent_and_seed() {
+fn default_run_folders_are_agent_preset_and_seed_and_never_collide() {
+    // The quick start's commands, one after another in one folder: the default preset goes
+    // to runs/<agent>-s<seed>, any other to runs/<agent>-<preset>-s<seed>.
     let tmp = tempfile::tempdir().unwrap();
+    for (extra, folder) in [
+        (vec![], "runs/sac-s7"),
+        (vec!["--preset", "smoke"], "runs/sac-smoke-s7"),
+        (
+            vec!["--preset", "smoke", "--env", "pendulum"],
+            "runs/sac-smoke-pendulum-s7",
+        ),
+    ] {
+        let mut args = vec!["train", "sac", "--seed", "7", "--episodes", "1"];
+        args.extend(extra);
+        let out = common::esrl_in(tmp.path(), &args);
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            tmp.path().join(folder).join("metrics.csv").is_file(),
+            "{folder}"
+        );
+    }
+    // The same command again names the folder and how to continue it.
     let out = common::esrl_in(
         tmp.path(),
         &[
@@ -58,10 +84,11 @@ fn default_run_folder_is_agent_and_seed() {
             "1",
         ],
     );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
     assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        stderr.contains("runs/sac-smoke-s7 already holds a run")
+            && stderr.contains("train sac --resume runs/sac-smoke-s7"),
+        "{stderr}"
     );
-    assert!(tmp.path().join("runs/sac-s7/metrics.csv").is_file());
 }

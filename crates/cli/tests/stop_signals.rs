@@ -70,7 +70,7 @@ fn stop_and_resume(signal: &str, status: i32) {
     let (exit, stderr) = stop_after_three_rows(&args(&split), &split, signal);
     assert_eq!(exit, Some(status), "{signal}: {stderr}");
     assert!(
-        stderr.contains("received: finishing the current"),
+        stderr.contains("received: a training finishes the current"),
         "{stderr}"
     );
     assert!(stderr.contains("--resume"), "{stderr}");

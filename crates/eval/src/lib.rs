@@ -20,7 +20,8 @@
 //!
 //! - Evaluation is deterministic (tanh μ) and on the run's own environment settings; it does
 //!   not test robustness to pushes, slopes or model changes.
-//! - A 60 s walking episode adds about 0.4 MB of trace to `eval.json`.
+//! - A 60 s walking episode adds about 0.4 MB of trace to `eval.json`; `esrl eval` keeps the
+//!   traces of the first 10 episodes unless asked (`--traces`).
 
 pub mod episode;
 pub mod load;
@@ -29,10 +30,10 @@ pub mod report;
 pub mod stick;
 
 pub use episode::{rollout, walk_episode, Rollout, WalkEpisode};
-pub use load::{load_run, locate, LoadedRun};
+pub use load::{load_run, load_run_pick, locate, locate_pick, LoadedRun, Pick};
 pub use recording::{metadata, Recorder};
 pub use report::{
-    eval_path, evaluate, evaluate_and_write, mean_gait, EpisodeEval, EvalMean, EvalReport, Trace,
-    EVAL_FILE,
+    eval_path, evaluate, evaluate_and_write, evaluate_with, mean_gait, EpisodeEval, EvalMean,
+    EvalOptions, EvalReport, Trace, EVAL_FILE,
 };
-pub use stick::{StickFigure, StickRecorder, DEFAULT_INTERVAL};
+pub use stick::{animated_svg, render_rgb, StickFigure, StickRecorder, DEFAULT_INTERVAL};

@@ -35,8 +35,26 @@ impl LoadedRun {
     }
 }
 
-/// Finds the run folder and the checkpoint folder for a path that is either.
+/// Which policy of a run folder to load.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Pick {
+    /// The policy the run hands over: `RUN/best/` when the run keeps one (ES runs, and any
+    /// run with a walking check), else the last checkpoint.
+    #[default]
+    Kept,
+    /// The last checkpoint's actor.
+    Last,
+}
+
+/// Finds the run folder and the checkpoint folder for a path that is either (a run folder
+/// means its last checkpoint; [`locate_pick`] chooses).
 pub fn locate(path: &Path) -> Result<(PathBuf, PathBuf)> {
+    locate_pick(path, Pick::Last)
+}
+
+/// Finds the run folder and the policy folder of `path`: a checkpoint or `best/` folder as
+/// given, or, for a run folder, `RUN/best/` or the last checkpoint as `pick` says.
+pub fn locate_pick(path: &Path, pick: Pick) -> Result<(PathBuf, PathBuf)> {
     if !path.exists() {
         bail!("{}: no such run or checkpoint folder", path.display());
     }
@@ -66,6 +84,10 @@ pub fn locate(path: &Path) -> Result<(PathBuf, PathBuf)> {
         );
     }
     if path.join(RunDir::CONFIG).is_file() {
+        let best = path.join(checkpoint::BEST);
+        if pick == Pick::Kept && best.join("agent.safetensors").is_file() {
+            return Ok((path.to_path_buf(), best));
+        }
         let ckpt = checkpoint::find(path).with_context(|| {
             format!(
                 "{} has no complete checkpoint (checkpoint/ with state.json and \
@@ -82,10 +104,19 @@ pub fn locate(path: &Path) -> Result<(PathBuf, PathBuf)> {
     )
 }
 
-/// Loads the run's config and the checkpoint's weights (run or checkpoint folder).
+/// Loads the run's config and the checkpoint's weights (run or checkpoint folder; a run
+/// folder means its last checkpoint).
 pub fn load_run(path: &Path) -> Result<LoadedRun> {
-    let (run, ckpt) = locate(path)?;
-    let (config, _) = checkpoint::run_config(&run)?;
+    load_run_pick(path, Pick::Last)
+}
+
+/// Loads a policy ([`locate_pick`]) with the configuration it was trained with: the copy in
+/// its folder when it has one (checkpoints and `best/` keep one), else the run's. Refuses a
+/// run whose `config.toml` was changed since (other than its budget and thread keys), and
+/// weights that do not match their folder's `manifest.json`.
+pub fn load_run_pick(path: &Path, pick: Pick) -> Result<LoadedRun> {
+    let (run, ckpt) = locate_pick(path, pick)?;
+    let config = checkpoint::policy_config(&run, &ckpt)?;
     let envs = build::envs(config.env, &config.walk)
         .with_context(|| format!("the environment of {}", run.display()))?;
     let mut agent =

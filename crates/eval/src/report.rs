@@ -186,6 +186,10 @@ pub struct EvalReport {
     pub checkpoint: String,
     /// Seed of the first episode (episode k uses seed + k).
     pub seed: u64,
+    /// Episodes asked for: more than `episodes` holds when the evaluation was stopped early
+    /// (0 in reports written before this field).
+    #[serde(default)]
+    pub requested: usize,
     /// Track length (m) of the walking environment, `null` for the pendulum.
     pub track_length: Option<f64>,
     /// One entry per episode.
@@ -196,12 +200,43 @@ pub struct EvalReport {
 
 /// Evaluates `loaded` on `episodes` deterministic episodes with seeds `seed, seed + 1, …`
 /// (in parallel; the results do not depend on the thread count). With `record`, each
-/// episode is also written to `record/episode-NNN.mcap` (walking runs only).
+/// episode is also written to `record/episode-NNN.mcap` (walking runs only). Every episode
+/// keeps its trace ([`evaluate_with`] bounds them).
 pub fn evaluate(
     loaded: &LoadedRun,
     seed: u64,
     episodes: usize,
     record: Option<&Path>,
+) -> Result<EvalReport> {
+    evaluate_with(
+        loaded,
+        seed,
+        episodes,
+        record,
+        &EvalOptions {
+            traces: episodes,
+            stop: None,
+        },
+    )
+}
+
+/// How [`evaluate_with`] runs.
+pub struct EvalOptions<'a> {
+    /// Episodes (the first ones) whose per-step trace is kept in the report (≈ 0.4 MB each
+    /// for a 60 s walking episode); the others keep their metrics only.
+    pub traces: usize,
+    /// Polled between batches of episodes: when it says stop, the episodes done so far are
+    /// reported (the report's `requested` says how many were asked for).
+    pub stop: Option<&'a (dyn Fn() -> bool + Sync)>,
+}
+
+/// [`evaluate`] with a bound on the traces kept and a way to stop early.
+pub fn evaluate_with(
+    loaded: &LoadedRun,
+    seed: u64,
+    episodes: usize,
+    record: Option<&Path>,
+    options: &EvalOptions<'_>,
 ) -> Result<EvalReport> {
     if episodes == 0 {
         bail!("--episodes 0: evaluate at least one episode");
@@ -219,13 +254,30 @@ pub fn evaluate(
         EnvKind::Walk => Some(f64::from(loaded.config.walk.track_length)),
         EnvKind::Pendulum => None,
     };
-    let results: Vec<EpisodeEval> = (0..episodes)
-        .into_par_iter()
-        .map(|k| {
-            let path = record.map(|d| d.join(format!("episode-{k:03}.mcap")));
-            evaluate_episode(loaded, seed + k as u64, path.as_deref())
-        })
-        .collect::<Result<_>>()?;
+    // Batches of a few episodes per thread, so a stop request is answered within one
+    // batch and the episodes done are kept.
+    let batch = 4 * rayon::current_num_threads().max(1);
+    let mut results: Vec<EpisodeEval> = Vec::with_capacity(episodes.min(1 << 20));
+    for start in (0..episodes).step_by(batch) {
+        if options.stop.is_some_and(|stop| stop()) {
+            break;
+        }
+        let done: Vec<EpisodeEval> = (start..(start + batch).min(episodes))
+            .into_par_iter()
+            .map(|k| {
+                let path = record.map(|d| d.join(format!("episode-{k:03}.mcap")));
+                let mut e = evaluate_episode(loaded, seed + k as u64, path.as_deref())?;
+                if k >= options.traces {
+                    e.trace = None;
+                }
+                Ok(e)
+            })
+            .collect::<Result<_>>()?;
+        results.extend(done);
+    }
+    if results.is_empty() {
+        bail!("stopped before the first episode finished; nothing to report");
+    }
     let mean = aggregate(&results)?;
     Ok(EvalReport {
         run: loaded.run.display().to_string(),
@@ -233,6 +285,7 @@ pub fn evaluate(
         env: loaded.config.env,
         checkpoint: loaded.checkpoint.display().to_string(),
         seed,
+        requested: episodes,
         track_length,
         episodes: results,
         mean,

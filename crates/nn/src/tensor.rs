@@ -183,7 +183,7 @@ impl Tensor {
     /// Inverse of [`Tensor::batch_major_to_time_major`].
     pub fn time_major_to_batch_major(&self, batch: usize) -> Tensor {
         assert!(
-            batch > 0 && self.rows % batch == 0,
+            batch > 0 && self.rows.is_multiple_of(batch),
             "time_major_to_batch_major: {} rows not a multiple of batch {batch}",
             self.rows
         );
@@ -194,7 +194,7 @@ impl Tensor {
 /// Views `rows` as an `(outer, inner)` grid of rows and transposes the grid.
 fn transpose_blocks(x: &Tensor, outer: usize) -> Tensor {
     assert!(
-        outer > 0 && x.rows % outer == 0,
+        outer > 0 && x.rows.is_multiple_of(outer),
         "sequence reorder: {} rows not a multiple of {outer}",
         x.rows
     );

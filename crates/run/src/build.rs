@@ -119,13 +119,17 @@ impl AnyLearner {
 
 /// The thread pool a run computes on, `threads` threads (one per core when 0): the hybrid
 /// loop's rollouts and every learner's updates (their large products) share it. Results do
-/// not depend on its size.
+/// not depend on its size. More than 4 threads per core is refused.
 pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
-    let threads = if threads == 0 {
-        std::thread::available_parallelism().map_or(1, |n| n.get())
-    } else {
-        threads
-    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    if threads > 4 * cores {
+        return Err(Error::Msg(format!(
+            "--threads {threads}: this machine has {cores} core(s), and more than 4 threads a \
+             core only slows a run down (results do not depend on the thread count; 0 uses \
+             every core)"
+        )));
+    }
+    let threads = if threads == 0 { cores } else { threads };
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()

@@ -25,6 +25,14 @@
 //! every [`CheckConfig::every_steps`] environment steps, the policy of the latest row (so a
 //! walk that appears after an early high score is still seen).
 //!
+//! **Cost.** A check simulates up to `starts` whole episodes (24,000 steps for 10 walking
+//! starts of 60 s). It runs beside the next row on the run's thread pool (the training
+//! session joins the two), so on two threads it mostly takes the core the rollouts leave
+//! idle while the updates run; on one thread it adds its time. Before a checkpoint, the
+//! check still due runs first, so a checkpoint covers every check of its rows and a resumed
+//! run repeats them exactly. `checks.jsonl` gives each check's seconds and the summary their
+//! total (`check_s`).
+//!
 //! The check draws nothing from the run's other streams and changes nothing the learner
 //! does: a run learns the same with or without it, and only which policy `RUN/best/` keeps,
 //! the rows of `checks.jsonl` and the summary's `steps_to_walk` differ.

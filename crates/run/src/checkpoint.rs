@@ -150,6 +150,23 @@ const MANIFEST_FILES: [&str; 4] = [
     "config.toml",
 ];
 
+/// The files the manifest of `RUN/best/` covers.
+const BEST_MANIFEST_FILES: [&str; 4] = [
+    "agent.safetensors",
+    "actor.safetensors",
+    BEST_INFO,
+    "config.toml",
+];
+
+/// Writes `dir/manifest.json` with the SHA-256 of `files` (written last).
+fn write_manifest(dir: &Path, files: &[&str]) -> Result<()> {
+    let mut sha256 = BTreeMap::new();
+    for name in files {
+        sha256.insert(name.to_string(), sha256_file(&dir.join(name))?);
+    }
+    write_json_atomic(&dir.join("manifest.json"), &Manifest { sha256 })
+}
+
 /// Where the newest complete checkpoint of a run folder is, if any.
 pub fn find(run: &Path) -> Option<PathBuf> {
     ["checkpoint", "checkpoint.old"]
@@ -185,11 +202,7 @@ pub fn save<L: Learner>(
     };
     write_json_atomic(&tmp.join("state.json"), &file)?;
     write_atomic(&tmp.join("config.toml"), cfg.to_toml()?.as_bytes())?;
-    let mut sha256 = BTreeMap::new();
-    for name in MANIFEST_FILES {
-        sha256.insert(name.to_string(), sha256_file(&tmp.join(name))?);
-    }
-    write_json_atomic(&tmp.join("manifest.json"), &Manifest { sha256 })?;
+    write_manifest(&tmp, &MANIFEST_FILES)?;
     swap_in(&tmp, &run.join("checkpoint"), &run.join("checkpoint.old"))?;
     prune_replay(run, state.replay.as_ref())
 }
@@ -310,21 +323,24 @@ pub struct BestInfo {
 /// value so far ([`Learner::scored_agent`]: for the hybrid loop, the RL agent with the actor
 /// and log α of that generation's best individual). `esrl eval RUN/best` evaluates it.
 ///
-/// Same layout as a checkpoint less the replay buffer and `state.json`, written to
-/// `best.tmp/` and swapped in like one. It is not a point to resume from.
-pub fn save_best(run: &Path, agent: &Agent, info: &BestInfo) -> Result<()> {
+/// Same layout as a checkpoint less the replay buffer and `state.json` (weights, `best.json`,
+/// the run's `config.toml`, a `manifest.json` of their SHA-256), written to `best.tmp/` and
+/// swapped in like one. It is not a point to resume from.
+pub fn save_best(run: &Path, cfg: &TrainConfig, agent: &Agent, info: &BestInfo) -> Result<()> {
     let tmp = fresh_dir(&run.join("best.tmp"))?;
     write_agent(&tmp, agent.state_tensors(), agent)?;
     write_json_atomic(&tmp.join(BEST_INFO), info)?;
+    write_atomic(&tmp.join("config.toml"), cfg.to_toml()?.as_bytes())?;
+    write_manifest(&tmp, &BEST_MANIFEST_FILES)?;
     swap_in(&tmp, &run.join(BEST), &run.join("best.old"))
 }
 
 /// The folder of [`snapshot_best`] at `steps` environment steps: `best-2M`, `best-500k`,
 /// `best-1234`.
 pub fn best_snapshot_name(steps: u64) -> String {
-    if steps % 1_000_000 == 0 {
+    if steps.is_multiple_of(1_000_000) {
         format!("{BEST}-{}M", steps / 1_000_000)
-    } else if steps % 1000 == 0 {
+    } else if steps.is_multiple_of(1000) {
         format!("{BEST}-{}k", steps / 1000)
     } else {
         format!("{BEST}-{steps}")
@@ -373,11 +389,22 @@ pub fn remove_best(run: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Checks every file of a checkpoint folder against its `manifest.json` (checkpoints written
-/// before manifests existed have none and pass).
-fn verify_manifest(dir: &Path) -> Result<()> {
+/// Checks every file of a checkpoint or `best/` folder against its `manifest.json`.
+/// Checkpoints of format version 2 and later always have one, so one without is refused;
+/// checkpoints written before manifests existed, and `best/` folders and policy copies
+/// written before `best/` had one (the committed `results/` policies), have none and pass.
+pub fn verify_manifest(dir: &Path) -> Result<()> {
     let p = dir.join("manifest.json");
     if !p.exists() {
+        let version = read_run_state(dir).map(|s| s.version).unwrap_or(1);
+        if dir.join("state.json").exists() && version >= 2 {
+            bail!(
+                "{} is missing: a checkpoint of this format always has one, so it was removed \
+                 and nothing in {} can be verified. Restore it, or start a new run",
+                p.display(),
+                dir.display()
+            );
+        }
         return Ok(());
     }
     let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
@@ -431,9 +458,64 @@ pub fn run_config(run: &Path) -> Result<(TrainConfig, bool)> {
     Ok((cfg, changed))
 }
 
+/// Keys a run may change after a checkpoint: its budget, threads and checkpoint period.
+const FREE_KEYS: [&str; 6] = [
+    "generations",
+    "episodes",
+    "max_env_steps",
+    "threads",
+    "checkpoint_every",
+    "stop_at_walk",
+];
+
+/// Differences between two configurations outside [`FREE_KEYS`].
+fn fixed_differences(stored: &TrainConfig, cfg: &TrainConfig) -> Result<Vec<String>> {
+    Ok(config_differences(stored, cfg)?
+        .into_iter()
+        .filter(|d| !FREE_KEYS.iter().any(|k| d.starts_with(&format!("{k}:"))))
+        .collect())
+}
+
+/// The configuration the policy in `dir` (a checkpoint or `best/` folder of `run`) was
+/// trained with: the copy in `dir` when it has one, else the copy in the run's last
+/// checkpoint, else the run's `config.toml`. Refused when the run's `config.toml` was
+/// changed since in anything but its budget and threads: evaluation and recordings use the
+/// settings a policy was trained with, never edited ones.
+pub fn policy_config(run: &Path, dir: &Path) -> Result<TrainConfig> {
+    let (run_cfg, _) = run_config(run)?;
+    let copy = [Some(dir.to_path_buf()), find(run)]
+        .into_iter()
+        .flatten()
+        .map(|d| d.join(RunDir::CONFIG))
+        .find(|p| p.is_file());
+    let Some(p) = copy.filter(|p| *p != run.join(RunDir::CONFIG)) else {
+        return Ok(run_cfg);
+    };
+    let mut stored = TrainConfig::load(&p)?;
+    let version = p
+        .parent()
+        .and_then(|d| read_run_state(d).ok())
+        .map_or(STATE_VERSION, |s| s.version);
+    if version < 2 {
+        legacy_ddpg_settings(&mut stored);
+    }
+    let diff = fixed_differences(&stored, &run_cfg)?;
+    if !diff.is_empty() {
+        bail!(
+            "{} differs from the configuration the policy was trained with ({}; trained vs \
+             config.toml, from {}): evaluations and recordings use a policy's own settings. \
+             Restore config.toml",
+            run.join(RunDir::CONFIG).display(),
+            diff.join(", "),
+            p.display()
+        );
+    }
+    Ok(stored)
+}
+
 /// Refuses to resume when the run's configuration changed since the checkpoint was written,
-/// naming what changed. Budget keys (`generations`, `episodes`, `max_env_steps`), `threads`
-/// and `checkpoint_every` may change.
+/// naming what changed. Budget keys (`generations`, `episodes`, `max_env_steps`,
+/// `stop_at_walk`), `threads` and `checkpoint_every` may change.
 pub fn check_config(dir: &Path, state: &RunState, cfg: &TrainConfig) -> Result<()> {
     let p = dir.join("config.toml");
     if !p.exists() {
@@ -443,17 +525,7 @@ pub fn check_config(dir: &Path, state: &RunState, cfg: &TrainConfig) -> Result<(
     if state.version < 2 {
         legacy_ddpg_settings(&mut stored);
     }
-    let free = [
-        "generations",
-        "episodes",
-        "max_env_steps",
-        "threads",
-        "checkpoint_every",
-    ];
-    let diff: Vec<String> = config_differences(&stored, cfg)?
-        .into_iter()
-        .filter(|d| !free.iter().any(|k| d.starts_with(&format!("{k}:"))))
-        .collect();
+    let diff = fixed_differences(&stored, cfg)?;
     if !diff.is_empty() {
         bail!(
             "the run's config.toml differs from the configuration its checkpoint was trained \
@@ -598,6 +670,7 @@ pub fn read_tensors(dir: &Path) -> Result<HashMap<String, Vec<f32>>> {
 
 /// Loads the agent tensors of a checkpoint folder into `agent` (same architecture).
 pub fn load_agent(dir: &Path, agent: &mut Agent) -> Result<()> {
+    verify_manifest(dir)?;
     let tensors = read_tensors(dir)?;
     agent.load_state_tensors(&tensors).with_context(|| {
         format!(

@@ -59,6 +59,20 @@ pub mod run_dir;
 pub mod summary;
 pub mod training;
 
+/// How messages tell a user to run the `esrl` command (`esrl`, `target/release/esrl`, …):
+/// `esrl` until a front end says otherwise ([`set_command`]).
+pub fn command() -> &'static str {
+    COMMAND.get().map_or("esrl", String::as_str)
+}
+
+/// Sets, once per process, how messages name the `esrl` command (the binary sets the path it
+/// was started by when `esrl` on the `PATH` is not itself).
+pub fn set_command(name: impl Into<String>) {
+    let _ = COMMAND.set(name.into());
+}
+
+static COMMAND: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+
 pub use build::{AnyLearner, Envs, LearnerVisitor};
 pub use config::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
 pub use error::{Context, Error, Result};

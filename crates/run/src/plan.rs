@@ -68,8 +68,9 @@ pub fn plan(req: &TrainRequest) -> Result<TrainPlan> {
                 "starts it over (it stopped before its first checkpoint)"
             };
             bail!(
-                "{dir} already holds a run; `esrl train {agent} --resume {dir}` {how}, or \
+                "{dir} already holds a run; `{esrl} train {agent} --resume {dir}` {how}, or \
                  give this one a new folder with --out DIR",
+                esrl = crate::command(),
                 dir = root.display(),
                 agent = req.agent.name(),
             );

@@ -47,6 +47,40 @@ pub fn write_json_atomic<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     write_atomic(path, text.as_bytes())
 }
 
+/// Checks that a command may write its output file at `path`: nothing is there, or, with
+/// `force`, a regular file is. Devices (`/dev/null`), pipes, sockets, folders and symbolic
+/// links are never replaced (the file is written beside and renamed over the path, which
+/// would replace them), and an existing file is replaced only when asked.
+pub fn check_output(path: &Path, force: bool) -> Result<()> {
+    let Ok(meta) = fs::symlink_metadata(path) else {
+        return Ok(());
+    };
+    let kind = meta.file_type();
+    if kind.is_symlink() {
+        bail!(
+            "{} is a symbolic link; give the file's own path (links are not replaced)",
+            path.display()
+        );
+    }
+    if kind.is_dir() {
+        bail!("{} is a folder; give a file name", path.display());
+    }
+    if !kind.is_file() {
+        bail!(
+            "{} exists and is not a regular file (a device, pipe or socket): it is never \
+             replaced; choose another path",
+            path.display()
+        );
+    }
+    if !force {
+        bail!(
+            "{} exists; --force replaces it, or choose another path",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
 /// Appends `value` as one line of the JSON Lines file `path`, flushed.
 pub fn append_jsonl<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     let line = serde_json::to_string(value)?;
@@ -218,17 +252,25 @@ impl RunDir {
             bail!("a metrics row must serialise to a JSON object");
         };
         let line = serde_json::to_string(&map)?;
-        writeln!(self.jsonl, "{line}")?;
-        self.jsonl.flush()?;
+        let (jsonl, csv) = (self.root.join(Self::JSONL), self.root.join(Self::CSV));
+        let writing = |p: &Path| format!("writing {}", p.display());
+        writeln!(self.jsonl, "{line}")
+            .and_then(|()| self.jsonl.flush())
+            .with_context(|| writing(&jsonl))?;
+        let mut text = String::new();
         if self.columns.is_none() {
             let cols: Vec<String> = map.keys().cloned().collect();
-            writeln!(self.csv, "{}", cols.join(","))?;
+            text = cols.join(",") + "\n";
             self.columns = Some(cols);
         }
         if let Some(cols) = &self.columns {
-            writeln!(self.csv, "{}", csv_line(cols, &map))?;
+            text += &csv_line(cols, &map);
+            text.push('\n');
         }
-        self.csv.flush()?;
+        self.csv
+            .write_all(text.as_bytes())
+            .and_then(|()| self.csv.flush())
+            .with_context(|| writing(&csv))?;
         self.rows += 1;
         Ok(())
     }

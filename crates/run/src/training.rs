@@ -47,7 +47,8 @@ pub struct RowDone {
     pub best: f64,
     /// Its one-line description.
     pub summary: String,
-    /// The walking check run after this row, if one was due.
+    /// A walking check that finished while this row ran: of the policy of the row before,
+    /// when that one was due a check.
     pub check: Option<CheckRecord>,
 }
 
@@ -66,6 +67,67 @@ pub struct Training<L: Learner> {
     wall0: f64,
     /// The walking check, for runs with a `[check]` on the walking task.
     checker: Option<Checker>,
+    /// `RUN/.lock`, held while the session lives: one process trains a run folder at a time.
+    _lock: std::fs::File,
+    /// The check due after the last row, run beside the next one.
+    due: Option<Due>,
+}
+
+/// A policy due a walking check, and the row it comes from.
+struct Due {
+    agent: esrl_agents::Agent,
+    row: usize,
+    env_steps: u64,
+    curve: f64,
+    trigger: Trigger,
+}
+
+/// A check done.
+struct Checked {
+    due: Due,
+    result: crate::check::CheckResult,
+    seconds: f64,
+}
+
+/// Runs the check of `due` (on the calling rayon pool).
+fn run_check(checker: Option<&Checker>, due: Due) -> Result<Checked> {
+    let checker = checker.ok_or_else(|| Error::Msg("a check is due without a checker".into()))?;
+    let t = Instant::now();
+    let result = checker.check(&due.agent)?;
+    Ok(Checked {
+        due,
+        result,
+        seconds: t.elapsed().as_secs_f64(),
+    })
+}
+
+/// The lock file of a run folder ([`lock_run`]).
+pub const LOCK_FILE: &str = ".lock";
+
+/// Creates `root` if needed and takes its lock (`RUN/.lock`, an advisory lock the operating
+/// system drops when the process ends, however it ends), refusing a folder another process
+/// is training.
+pub fn lock_run(root: &Path) -> Result<std::fs::File> {
+    std::fs::create_dir_all(root).with_context(|| format!("creating {}", root.display()))?;
+    let p = root.join(LOCK_FILE);
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&p)
+        .with_context(|| format!("opening {}", p.display()))?;
+    match file.try_lock() {
+        Ok(()) => Ok(file),
+        Err(std::fs::TryLockError::WouldBlock) => Err(Error::Msg(format!(
+            "{} is being trained by another process (it holds {}); wait for it to end, or \
+             stop it first",
+            root.display(),
+            p.display()
+        ))),
+        Err(std::fs::TryLockError::Error(e)) => {
+            Err(Error::from(e)).with_context(|| format!("locking {}", p.display()))
+        }
+    }
 }
 
 /// The file of a run's walking checks, one [`CheckRecord`] per line.
@@ -84,6 +146,8 @@ impl<L: Learner> Training<L> {
         envs: Arc<MakeEnv>,
         resume: bool,
     ) -> Result<(Self, Opening)> {
+        let pool = crate::build::pool(cfg.threads)?;
+        let lock = lock_run(root)?;
         let mut state = RunState::fresh();
         let (run, opening) = match (resume, checkpoint::find(root)) {
             (true, Some(dir)) => {
@@ -124,7 +188,6 @@ impl<L: Learner> Training<L> {
             let state = state.check.get_or_insert_with(CheckState::default);
             truncate_jsonl(&root.join(CHECKS_FILE), state.records)?;
         }
-        let pool = crate::build::pool(cfg.threads)?;
         let started = Instant::now();
         learner.prepare(envs.as_ref())?;
         let wall0 = state.wall_s;
@@ -140,6 +203,8 @@ impl<L: Learner> Training<L> {
                 started,
                 wall0,
                 checker,
+                _lock: lock,
+                due: None,
             },
             opening,
         ))
@@ -201,8 +266,20 @@ impl<L: Learner> Training<L> {
     /// last good checkpoint.
     pub fn step(&mut self) -> Result<RowDone> {
         let steps_before = self.learner.env_steps();
-        let (learner, envs) = (&mut self.learner, self.envs.as_ref());
-        let row = match self.pool.install(|| learner.run_row(envs)) {
+        // The check due after the last row runs beside this one (module docs of `check`).
+        let due = self.due.take();
+        let (learner, envs, checker) = (&mut self.learner, self.envs.as_ref(), &self.checker);
+        let (row, checked) = self.pool.install(|| {
+            rayon::join(
+                || learner.run_row(envs),
+                || due.map(|d| run_check(checker.as_ref(), d)),
+            )
+        });
+        let check = match checked {
+            Some(c) => Some(self.record_check(c?)?),
+            None => None,
+        };
+        let row = match row {
             Ok(row) if !row.curve().is_finite() => Err(AgentError::NonFinite {
                 what: "return",
                 update: self.learner.agent().updates(),
@@ -224,8 +301,8 @@ impl<L: Learner> Training<L> {
         }
         self.run.append(&value)?;
         let previous_best = self.best();
-        let check = match &self.checker {
-            Some(_) => self.check_row(curve > previous_best, curve)?,
+        match &self.checker {
+            Some(_) => self.due = self.check_due(curve > previous_best, curve)?,
             None => {
                 if curve > previous_best {
                     if let Some(agent) = self.learner.scored_agent()? {
@@ -235,12 +312,11 @@ impl<L: Learner> Training<L> {
                             env_steps: self.learner.env_steps(),
                             check: None,
                         };
-                        checkpoint::save_best(&self.root, &agent, &info)?;
+                        checkpoint::save_best(&self.root, &self.cfg, &agent, &info)?;
                     }
                 }
-                None
             }
-        };
+        }
         if let Some(every) = self.cfg.best_every_steps {
             // Each multiple of `every` this row's steps reached: `best/` as it stands now.
             let steps = self.learner.env_steps();
@@ -252,7 +328,7 @@ impl<L: Learner> Training<L> {
         self.state.curve.push(curve);
         self.state.q0.push(row.q0());
         self.write_summary(false)?;
-        if self.state.rows % self.cfg.checkpoint_every == 0 {
+        if self.state.rows.is_multiple_of(self.cfg.checkpoint_every) {
             self.checkpoint()?;
         }
         Ok(RowDone {
@@ -264,11 +340,11 @@ impl<L: Learner> Training<L> {
         })
     }
 
-    /// The walking check after a row (module docs of [`crate::check`]): when the row set a
-    /// new best curve value (`new_best`) or passed a multiple of `every_steps`, checks the
-    /// row's policy — the one that scored its curve value, or the agent itself — keeps it in
-    /// `RUN/best/` if it ranks above the policy there, and logs it to `checks.jsonl`.
-    fn check_row(&mut self, new_best: bool, curve: f64) -> Result<Option<CheckRecord>> {
+    /// Whether the row just run is due a walking check (module docs of [`crate::check`]):
+    /// it set a new best curve value (`new_best`) or passed a multiple of `every_steps`. Then
+    /// its policy — the one that scored its curve value, or the agent itself — is taken to be
+    /// checked beside the next row.
+    fn check_due(&mut self, new_best: bool, curve: f64) -> Result<Option<Due>> {
         let Some(checker) = &self.checker else {
             return Ok(None);
         };
@@ -290,18 +366,33 @@ impl<L: Learner> Training<L> {
             Some(agent) => agent,
             None => self.learner.agent().clone(),
         };
-        let t = Instant::now();
-        let result = self.pool.install(|| checker.check(&agent))?;
-        let seconds = t.elapsed().as_secs_f64();
+        Ok(Some(Due {
+            agent,
+            row: self.learner.rows() - 1,
+            env_steps: steps,
+            curve,
+            trigger,
+        }))
+    }
+
+    /// Logs a finished check to `checks.jsonl` and keeps its policy in `RUN/best/` if it
+    /// ranks above the policy there.
+    fn record_check(&mut self, checked: Checked) -> Result<CheckRecord> {
+        let Checked {
+            due,
+            result,
+            seconds,
+        } = checked;
+        let wall_s = self.wall_s();
         let state = self.state.check.get_or_insert_with(CheckState::default);
         let kept = state.kept.as_ref().is_none_or(|k| result.beats(&k.result));
         state.seconds += seconds;
         state.env_steps += result.check_steps;
         let record = CheckRecord {
-            row: self.learner.rows() - 1,
-            env_steps: steps,
-            wall_s: self.wall0 + self.started.elapsed().as_secs_f64(),
-            trigger,
+            row: due.row,
+            env_steps: due.env_steps,
+            wall_s,
+            trigger: due.trigger,
             result,
             kept,
             seconds,
@@ -309,11 +400,11 @@ impl<L: Learner> Training<L> {
         if kept {
             let info = BestInfo {
                 generation: record.row,
-                fitness: curve,
-                env_steps: steps,
+                fitness: due.curve,
+                env_steps: due.env_steps,
                 check: Some(record.result.clone()),
             };
-            checkpoint::save_best(&self.root, &agent, &info)?;
+            checkpoint::save_best(&self.root, &self.cfg, &due.agent, &info)?;
             state.kept = Some(record.clone());
         }
         if record.result.at_bar && state.first_walk.is_none() {
@@ -321,7 +412,7 @@ impl<L: Learner> Training<L> {
         }
         append_jsonl(&self.root.join(CHECKS_FILE), &record)?;
         state.records += 1;
-        Ok(Some(record))
+        Ok(record)
     }
 
     /// Writes the last checkpoint and the summary, `finished` saying whether the budget was
@@ -340,7 +431,18 @@ impl<L: Learner> Training<L> {
             .fold(f64::NEG_INFINITY, f64::max)
     }
 
+    /// Runs the check still due, if any, now: a checkpoint covers every check of its rows.
+    fn flush_check(&mut self) -> Result<Option<CheckRecord>> {
+        let Some(due) = self.due.take() else {
+            return Ok(None);
+        };
+        let checker = &self.checker;
+        let checked = self.pool.install(|| run_check(checker.as_ref(), due))?;
+        self.record_check(checked).map(Some)
+    }
+
     fn checkpoint(&mut self) -> Result<()> {
+        self.flush_check()?;
         self.state.wall_s = self.wall_s();
         checkpoint::save(&self.root, &self.cfg, &self.learner, &mut self.state)
             .with_context(|| format!("writing a checkpoint of {}", self.root.display()))

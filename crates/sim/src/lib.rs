@@ -236,8 +236,8 @@ pub use env::{Env, GaitSample, MakeEnv, Step, StepInfo};
 pub use episode::{hooks, run_episode, EpisodeEnd, EpisodeHook, Hooks};
 pub use error::{SimError, UrdfError};
 pub use model::{
-    JointKind, JointModel, LinkGeometry, LinkModel, LinkPose, RobotModel, Shape, ShapeGeometry,
-    HUMANOID_URDF, MAX_LINKS,
+    read_text_file, JointKind, JointModel, LinkGeometry, LinkModel, LinkPose, RobotModel, Shape,
+    ShapeGeometry, HUMANOID_URDF, MAX_LINKS, MAX_URDF_BYTES, MAX_XML_DEPTH,
 };
 pub use pendulum::Pendulum;
 pub use sim::{Base, LimitModel, PhysicsConfig, RobotSim, RobotState, SimSetup};

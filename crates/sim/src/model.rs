@@ -151,6 +151,82 @@ impl JointModel {
     }
 }
 
+/// Largest URDF file read, bytes (16 MiB; the humanoid is 14 kB).
+pub const MAX_URDF_BYTES: u64 = 16 << 20;
+
+/// Deepest element nesting of a URDF that is parsed (a URDF has 4 or 5 levels: robot, link,
+/// visual, geometry, box); deeper XML is refused before the recursive parser sees it.
+pub const MAX_XML_DEPTH: usize = 64;
+
+/// Reads a text file that must be a regular file of at most `limit` bytes: devices such as
+/// `/dev/zero`, pipes and oversized files are refused with an I/O error that says so,
+/// before anything large is read.
+pub fn read_text_file(path: &Path, limit: u64) -> std::io::Result<String> {
+    use std::io::{Error, ErrorKind, Read};
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(Error::new(
+            ErrorKind::InvalidInput,
+            "not a regular file (a device, pipe or folder)",
+        ));
+    }
+    if meta.len() > limit {
+        return Err(Error::new(
+            ErrorKind::InvalidInput,
+            format!(
+                "{} bytes, more than the {limit} this file may have",
+                meta.len()
+            ),
+        ));
+    }
+    let mut text = String::new();
+    std::fs::File::open(path)?
+        .take(limit + 1)
+        .read_to_string(&mut text)?;
+    if text.len() as u64 > limit {
+        return Err(Error::new(
+            ErrorKind::InvalidInput,
+            format!("more than the {limit} bytes this file may have"),
+        ));
+    }
+    Ok(text)
+}
+
+/// The deepest element nesting of an XML text, counted without parsing: `<name` opens,
+/// `</name` and `/>` close; comments, processing instructions, declarations and CDATA are
+/// skipped. (Close enough for a bound: attribute values holding `/>` could only lower it.)
+fn xml_depth(text: &str) -> usize {
+    let b = text.as_bytes();
+    let (mut depth, mut max, mut i) = (0usize, 0usize, 0usize);
+    while i < b.len() {
+        if b[i] != b'<' {
+            i += 1;
+            continue;
+        }
+        let rest = &text[i..];
+        let skip_to = |end: &str| rest.find(end).map_or(b.len(), |k| i + k + end.len());
+        if rest.starts_with("<!--") {
+            i = skip_to("-->");
+        } else if rest.starts_with("<![CDATA[") {
+            i = skip_to("]]>");
+        } else if rest.starts_with("<?") || rest.starts_with("<!") {
+            i = skip_to(">");
+        } else if rest.starts_with("</") {
+            depth = depth.saturating_sub(1);
+            i = skip_to(">");
+        } else {
+            let end = skip_to(">");
+            let self_closing = end >= 2 && b[end - 2] == b'/';
+            if !self_closing {
+                depth += 1;
+                max = max.max(depth);
+            }
+            i = end;
+        }
+    }
+    max
+}
+
 /// Most links a URDF may have (the humanoid has 14; a few hundred covers any legged robot).
 pub const MAX_LINKS: usize = 256;
 
@@ -186,18 +262,26 @@ impl RobotModel {
         Ok(CACHE.get_or_init(|| m).clone())
     }
 
-    /// Reads and validates a URDF file.
+    /// Reads and validates a URDF file (a regular file of at most [`MAX_URDF_BYTES`]).
     pub fn from_urdf_path(path: impl AsRef<Path>) -> Result<Self, UrdfError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| UrdfError::Io {
+        let text = read_text_file(path, MAX_URDF_BYTES).map_err(|source| UrdfError::Io {
             path: path.to_path_buf(),
             source,
         })?;
         Self::from_urdf_str(&text)
     }
 
-    /// Parses and validates URDF text. Never panics.
+    /// Parses and validates URDF text. Never panics; XML nested deeper than
+    /// [`MAX_XML_DEPTH`] is refused before parsing (the parser recurses once per level).
     pub fn from_urdf_str(text: &str) -> Result<Self, UrdfError> {
+        let depth = xml_depth(text);
+        if depth > MAX_XML_DEPTH {
+            return Err(UrdfError::Parse(format!(
+                "elements nested {depth} deep; a URDF needs 4 or 5 levels and at most \
+                 {MAX_XML_DEPTH} are read"
+            )));
+        }
         // urdf-rs and its XML parsers are third-party code fed with user input: a panic in
         // them must come back as an error, not abort the caller.
         let parsed = std::panic::catch_unwind(|| urdf_rs::read_from_string(text));

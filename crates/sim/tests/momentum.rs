@@ -97,7 +97,7 @@ fn internal_torques_do_not_move_the_centre_of_mass() {
     for k in 0..(4.0 / setup.dt).round() as usize {
         for (name, tau, period) in drive {
             // Periods in control steps of 25 ms.
-            let sign = if (k / (period * physics_substeps)) % 2 == 0 {
+            let sign = if (k / (period * physics_substeps)).is_multiple_of(2) {
                 1.0
             } else {
                 -1.0

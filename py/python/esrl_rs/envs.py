@@ -10,7 +10,12 @@
 ``step`` returns ``info["reward_terms"]`` (name → value; they sum to the reward) and, for the
 walk task, ``info["gait"]`` (torso position, joint torques and power, foot forces, ...). The
 environments truncate episodes themselves (``max_episode_steps``), so they are registered
-without a ``TimeLimit`` wrapper.
+without a ``TimeLimit`` wrapper. Once a step has ended the episode (``terminated`` or
+``truncated``), ``step`` raises ``EsrlError`` until the next ``reset``.
+
+``WalkEnv(render_mode="rgb_array")``: ``render()`` returns the robot seen from the side as an
+``(H, W, 3)`` uint8 image (the camera follows the torso; left links blue, right ones orange,
+a ground tick every metre), so Gymnasium's ``RecordVideo`` wrapper films it.
 """
 
 from __future__ import annotations
@@ -33,17 +38,26 @@ class _RustEnv(gym.Env[np.ndarray, np.ndarray]):
     """A Gymnasium ``Env`` around an ``EnvCore``."""
 
     metadata: Dict[str, Any] = {"render_modes": []}
+    _render_modes: List[str] = []
 
     def __init__(self, core: EnvCore, obs_low: np.ndarray, obs_high: np.ndarray,
                  render_mode: Optional[str] = None) -> None:
-        if render_mode is not None:
-            raise ValueError(f"render_mode={render_mode!r}: esrl environments do not render "
-                             "(record a rollout to MCAP with `esrl record` instead)")
-        self.render_mode = None
+        if render_mode is not None and render_mode not in self._render_modes:
+            raise ValueError(f"render_mode={render_mode!r}: {type(self).__name__} renders "
+                             f"{self._render_modes or 'nothing'} (record a rollout with "
+                             "`esrl record RUN --out walk.svg` or `walk.mcap` instead)")
+        self.render_mode = render_mode
         self._core = core
         self.observation_space = spaces.Box(obs_low, obs_high, dtype=np.float32)
         self.action_space = spaces.Box(-1.0, 1.0, shape=(core.act_dim,), dtype=np.float32)
-        self.metadata = {"render_modes": [], "render_fps": round(1.0 / core.control_period)}
+        self.metadata = {"render_modes": list(self._render_modes),
+                         "render_fps": round(1.0 / core.control_period)}
+
+    def render(self) -> Optional[np.ndarray]:
+        """With ``render_mode="rgb_array"``: the side view now, ``(H, W, 3)`` uint8."""
+        if self.render_mode == "rgb_array":
+            return self._core.render()
+        return None
 
     @property
     def obs_names(self) -> List[str]:
@@ -92,7 +106,9 @@ class _RustEnv(gym.Env[np.ndarray, np.ndarray]):
 class WalkEnv(_RustEnv):
     """The humanoid walking task (SPEC §2). ``config``: any subset of ``WalkConfig``'s fields,
     e.g. ``{"episode_seconds": 10, "reward": {"lateral": 2.0}}``; unknown keys raise
-    ``ValueError``."""
+    ``ValueError``. ``render_mode="rgb_array"`` renders the side view (module docs)."""
+
+    _render_modes = ["rgb_array"]
 
     def __init__(self, config: Optional[Mapping[str, Any]] = None,
                  render_mode: Optional[str] = None) -> None:
@@ -111,6 +127,7 @@ class Pendulum(_RustEnv):
 
     def __init__(self, render_mode: Optional[str] = None) -> None:
         core = EnvCore.pendulum()
+        # The pendulum renders nothing (`_render_modes` is empty).
         high = np.array([1.0, 1.0, 8.0], dtype=np.float32)
         super().__init__(core, -high, high, render_mode)
 

@@ -87,7 +87,7 @@ impl<'a> Graph<'a> {
             s.input
         );
         assert!(
-            batch > 0 && rows % batch == 0 && rows > 0,
+            batch > 0 && rows.is_multiple_of(batch) && rows > 0,
             "lstm: {rows} rows is not a positive multiple of batch {batch}"
         );
         let (h0v, c0v) = (self.value(h0), self.value(c0));

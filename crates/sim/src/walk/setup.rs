@@ -232,6 +232,15 @@ fn foot_links(model: &RobotModel, config: &WalkConfig) -> Result<[usize; 2], Sim
             .link_index(name)
             .ok_or_else(|| model_err("foot_links", format!("the model has no link `{name}`")))?;
     }
+    if feet[0] == feet[1] {
+        return Err(model_err(
+            "foot_links",
+            format!(
+                "names `{}` twice: the left and right foot must be two links",
+                config.foot_links[0]
+            ),
+        ));
+    }
     Ok(feet)
 }
 

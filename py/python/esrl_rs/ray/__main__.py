@@ -39,14 +39,17 @@ def _parser() -> argparse.ArgumentParser:
     )
     t.add_argument("agent", choices=AGENTS)
     t.add_argument("--seed", type=int, help="seed of every random stream in the run")
-    t.add_argument("--out", metavar="DIR", help="run folder [default: runs/<agent>-s<seed>]")
+    t.add_argument("--out", metavar="DIR", help="run folder [default: runs/<agent>-s<seed>, "
+                   "runs/<agent>-<preset>-s<seed> for a preset other than walking]")
     t.add_argument(
         "--resume",
         metavar="DIR",
         help="continue the run in DIR from its last checkpoint (a run of either front end); "
         "--generations, --episodes, --steps and --threads may change",
     )
-    t.add_argument("--preset", choices=PRESETS, help="named settings [default: paper]")
+    t.add_argument("--preset", choices=PRESETS,
+                   help="named settings [default: walking, the recipe that walks; paper: the "
+                   "paper's literal protocol]")
     t.add_argument("--config", metavar="FILE.toml", help="TOML file overriding the preset")
     t.add_argument("--env", choices=ENVS, help="environment [default: walk]")
     t.add_argument("--urdf", metavar="PATH", help="a URDF instead of the embedded humanoid "
@@ -56,6 +59,9 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--generations", type=int, help="generations for ES agents")
     t.add_argument("--episodes", type=int, help="episodes for plain agents")
     t.add_argument("--steps", type=int, help="environment-step budget (any agent)")
+    t.add_argument("--until", choices=["walk", "budget"],
+                   help="walk: stop at the first policy at the walking bar; budget: run the "
+                   "whole budget [default: the config's]")
     t.add_argument("--no-progress", action="store_true",
                    help="accepted for parity with `esrl train`; progress is logged every 10 s")
     t.add_argument(
@@ -166,11 +172,16 @@ def train(argv: List[str]) -> int:
     from .. import _native
     from . import RayEvaluator
 
-    plan = _native.plan_train(
-        args.agent, seed=args.seed, out=args.out, resume=args.resume, preset=args.preset,
-        config=args.config, env=args.env, urdf=args.urdf, threads=args.threads,
-        generations=args.generations, episodes=args.episodes, steps=args.steps,
-    )
+    try:
+        plan = _native.plan_train(
+            args.agent, seed=args.seed, out=args.out, resume=args.resume, preset=args.preset,
+            config=args.config, env=args.env, urdf=args.urdf, threads=args.threads,
+            generations=args.generations, episodes=args.episodes, steps=args.steps,
+            until=args.until,
+        )
+    except (_native.EsrlError, ValueError, OSError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
     for note in plan.notes:
         print(note, file=sys.stderr)
     if not plan.hybrid:
