@@ -2,7 +2,7 @@
 //! acknowledged at once, a checkpoint is written, the command exits with 128 + the signal
 //! (143, 130), and `--resume` then produces exactly the rows and weights of an uninterrupted
 //! run. A stopped `esrl compare` starts no queued run and writes no table; the same command
-//! resumes it exactly.
+//! resumes it exactly. A stopped `esrl eval` writes the report of the episodes it finished.
 #![cfg(unix)]
 
 mod common;
@@ -176,4 +176,45 @@ fn a_stopped_comparison_starts_no_other_run_and_resumes_exactly() {
         std::fs::read_to_string(straight.join("table.csv")).unwrap(),
         std::fs::read_to_string(split.join("table.csv")).unwrap()
     );
+}
+
+#[test]
+fn a_stopped_evaluation_reports_the_episodes_it_finished() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("run");
+    common::smoke("es-sac", &run, &["--generations", "1"]);
+    let out = tmp.path().join("eval.json");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
+        .args([
+            "eval",
+            run.to_str().unwrap(),
+            "--episodes",
+            "100000",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let sent = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+    let exit = child.wait().unwrap();
+    let mut stderr = String::new();
+    child
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .unwrap();
+    assert_eq!(exit.code(), Some(130), "{stderr}");
+    let report = common::read_json(&out);
+    let done = report["episodes"].as_array().unwrap().len();
+    assert!(done > 0 && done < 100_000, "{done} episodes");
+    assert_eq!(report["requested"], 100_000);
+    assert_eq!(report["mean"]["episodes"].as_u64(), Some(done as u64));
+    assert!(stderr.contains("stopped:"), "{stderr}");
 }
