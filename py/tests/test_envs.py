@@ -16,7 +16,7 @@ import esrl_rs
 
 def _check(env: gym.Env) -> None:
     with warnings.catch_warnings():
-        # -inf/inf observation bounds (as Gymnasium's own MuJoCo humanoid) and no render modes
+        # -inf/inf observation bounds (as Gymnasium's own MuJoCo humanoid)
         warnings.simplefilter("ignore", UserWarning)
         check_env(env, skip_render_check=True)
 
@@ -29,6 +29,9 @@ def test_check_env_pendulum() -> None:
 def test_check_env_walk() -> None:
     _check(esrl_rs.WalkEnv())
     _check(gym.make("esrl/Walk-v0", config={"episode_seconds": 2.0}).unwrapped)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        check_env(esrl_rs.WalkEnv({"episode_seconds": 2.0}, render_mode="rgb_array"))
 
 
 def test_spaces() -> None:
@@ -157,6 +160,74 @@ def test_env_errors() -> None:
         esrl_rs.WalkEnv({"urdf": "/nonexistent/missing.urdf"})
     with pytest.raises(ValueError, match="render_mode"):
         esrl_rs.Pendulum(render_mode="human")
+    with pytest.raises(ValueError, match="render_mode"):
+        esrl_rs.WalkEnv(render_mode="human")
+
+
+def test_step_after_the_episode_ended_raises() -> None:
+    env = esrl_rs.Pendulum()
+    env.reset(seed=0)
+    for _ in range(200):
+        *_, truncated, _ = env.step(np.zeros(1, dtype=np.float32))
+    assert truncated
+    with pytest.raises(esrl_rs.EsrlError, match="episode ended"):
+        env.step(np.zeros(1, dtype=np.float32))
+    env.reset(seed=1)
+    env.step(np.zeros(1, dtype=np.float32))  # a reset starts the next episode
+    walk = esrl_rs.WalkEnv({"episode_seconds": 5.0})
+    walk.reset(seed=0)
+    terminated = False
+    while not terminated:
+        _, _, terminated, truncated, _ = walk.step(-np.ones(6, dtype=np.float32))
+        assert not truncated
+    with pytest.raises(esrl_rs.EsrlError, match="episode ended"):
+        walk.step(np.zeros(6, dtype=np.float32))
+
+
+def test_a_deeply_nested_urdf_is_an_error_not_a_crash(tmp_path) -> None:
+    deep = tmp_path / "deep.urdf"
+    deep.write_text('<robot name="r">' + "<link>" * 20000 + "</link>" * 20000 + "</robot>")
+    with pytest.raises(ValueError, match="nested 20001 deep"):
+        esrl_rs.WalkEnv({"urdf": str(deep)})
+
+
+def test_walk_renders_the_side_view() -> None:
+    env = esrl_rs.WalkEnv({"episode_seconds": 3.0}, render_mode="rgb_array")
+    assert env.metadata["render_modes"] == ["rgb_array"] and env.metadata["render_fps"] == 40
+    env.reset(seed=0)
+    first = env.render()
+    assert first.shape == (360, 480, 3) and first.dtype == np.uint8
+    coloured = (first != 255).any(axis=2)
+    assert 500 < coloured.sum() < 0.5 * coloured.size, "a robot and a ground line on white"
+    terminated = False
+    while not terminated:
+        *_, terminated, truncated, _ = env.step(-np.ones(6, dtype=np.float32))
+        if truncated:
+            break
+    fallen = env.render()
+    assert (fallen != first).any(), "the picture follows the robot"
+    # The robot's pixels sit lower once it has fallen.
+    rows = lambda img: np.nonzero((img != 255).any(axis=2) & ~(img == 120).all(axis=2))[0]
+    assert rows(fallen).min() > rows(first).min()
+    assert esrl_rs.WalkEnv().render() is None, "no render_mode: nothing"
+
+
+def test_record_video_films_the_walk(tmp_path) -> None:
+    pytest.importorskip("moviepy")
+    from gymnasium.wrappers import RecordVideo
+
+    env = RecordVideo(gym.make("esrl/Walk-v0", config={"episode_seconds": 1.0},
+                               render_mode="rgb_array"),
+                      video_folder=str(tmp_path), episode_trigger=lambda e: True,
+                      disable_logger=True)
+    env.reset(seed=0)
+    done = False
+    while not done:
+        *_, terminated, truncated, _ = env.step(np.zeros(6, dtype=np.float32))
+        done = terminated or truncated
+    env.close()
+    videos = list(tmp_path.glob("*.mp4"))
+    assert videos and videos[0].stat().st_size > 1000
 
 
 def test_threads_give_the_sequential_results() -> None:

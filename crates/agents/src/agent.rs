@@ -422,6 +422,14 @@ impl Agent {
         Ok(())
     }
 
+    /// Loads the actor alone from an `actor.safetensors` file ([`esrl_nn::save_params`] with
+    /// prefix ""): a policy folder that keeps no critics or optimiser state. The critics stay
+    /// as built, so [`Agent::q0`] means nothing afterwards.
+    pub fn load_actor(&mut self, path: &std::path::Path) -> Result<(), AgentError> {
+        esrl_nn::load_params(path, &mut [("", self.actor.params_mut())])?;
+        Ok(())
+    }
+
     /// Updates done and the agent's random stream, for checkpoints.
     pub fn counters(&self) -> (u64, ChaCha8Rng) {
         (self.updates, self.rng.clone())

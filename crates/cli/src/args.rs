@@ -24,8 +24,11 @@ pub enum Command {
     Eval(EvalArgs),
     /// Train or collect several agents × seeds and write Table 1 (Markdown and CSV).
     Compare(CompareArgs),
-    /// Record a rollout of a trained policy to an MCAP file for Foxglove.
+    /// Record a rollout of a trained policy: MCAP for Foxglove, or an SVG animation.
     Record(RecordArgs),
+    /// Run an experiment described by a study file (arms × seeds), resumably, and report it
+    /// with interval estimates.
+    Study(StudyArgs),
     /// Measure speed: environment steps, network passes, SAC updates, ES generations.
     Bench(BenchArgs),
 }
@@ -208,6 +211,55 @@ pub struct RecordArgs {
     /// Seed of the rollout's initial state.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+}
+
+/// `esrl study`.
+#[derive(Debug, Args)]
+pub struct StudyArgs {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: StudyCommand,
+}
+
+/// The study subcommands.
+#[derive(Debug, Subcommand)]
+pub enum StudyCommand {
+    /// Train every run of the study that is not finished (resuming stopped ones), evaluate
+    /// its handed-over policy and write its record; run it again to continue.
+    Run {
+        /// The study file (TOML; the format is in `esrl_cli::study`'s docs and the README).
+        study: PathBuf,
+        /// The study folder [default: studies/<file stem>].
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
+        /// Trainings side by side [default: cores / threads].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Only runs i, i + n, i + 2n, … (arms in order, seeds within): one of n machines.
+        #[arg(long, value_name = "i/n")]
+        shard: Option<String>,
+        /// Threads per training [default: cores / jobs]; results do not depend on it.
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Hide the progress bar of a single training.
+        #[arg(long)]
+        no_progress: bool,
+    },
+    /// Where every run of a study folder stands.
+    Status {
+        /// The study folder.
+        dir: PathBuf,
+    },
+    /// Per arm, the success rate at the walking bar (Wilson 95 %), IQMs with bootstrap
+    /// intervals, the probability of improvement between arms, every run's gait and Table 1:
+    /// DIR/report.md and DIR/report.csv from the records.
+    Report {
+        /// The study folder.
+        dir: PathBuf,
+        /// Print the figures as one JSON object instead of the Markdown.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 /// `esrl bench`.

@@ -90,8 +90,12 @@ pub struct Plan {
 }
 
 impl Plan {
-    fn name(&self) -> String {
-        run_name(self.agent, self.seed)
+    /// The run's name: its folder's (`<agent>-s<seed>`; a study's `<arm>-s<seed>`).
+    pub fn name(&self) -> String {
+        self.dir.file_name().map_or_else(
+            || run_name(self.agent, self.seed),
+            |n| n.to_string_lossy().into_owned(),
+        )
     }
 }
 
@@ -127,7 +131,7 @@ pub fn run_state(dir: &Path) -> Result<RunState> {
 }
 
 /// Fails when the run folder's config differs from the plan's.
-fn check_config(plan: &Plan) -> Result<()> {
+pub(crate) fn check_config(plan: &Plan) -> Result<()> {
     let (stored, _) = checkpoint::run_config(&plan.dir).with_context(|| {
         format!(
             "{} holds a run whose config cannot be read; move it away or choose another --out",
@@ -165,7 +169,7 @@ fn move_aside(dir: &Path) -> Result<PathBuf> {
 }
 
 /// Brings one run to "finished": reuses, resumes or trains it. Returns whether it trained.
-fn ensure_trained(plan: &Plan, progress: bool, label: &str) -> Result<bool> {
+pub(crate) fn ensure_trained(plan: &Plan, progress: bool, label: &str) -> Result<bool> {
     let state = run_state(&plan.dir)?;
     if state != RunState::Empty {
         if state == RunState::Stale {
@@ -228,7 +232,7 @@ fn ensure_trained(plan: &Plan, progress: bool, label: &str) -> Result<bool> {
 }
 
 /// Trains the pending plans, up to `jobs` at once. Returns one result per plan, in order.
-fn train_all(plans: &[Plan], jobs: usize, progress: bool) -> Vec<Result<()>> {
+pub(crate) fn train_all(plans: &[Plan], jobs: usize, progress: bool) -> Vec<Result<()>> {
     let queue: Mutex<VecDeque<usize>> = Mutex::new((0..plans.len()).collect());
     let results: Mutex<Vec<Option<Result<()>>>> =
         Mutex::new((0..plans.len()).map(|_| None).collect());

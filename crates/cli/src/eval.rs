@@ -265,7 +265,7 @@ pub fn render_table(report: &EvalReport) -> String {
                 e.seed.to_string(),
                 format_number(e.ret),
                 e.length.to_string(),
-                format_number(e.q0),
+                opt_number(e.q0),
             ];
             if walk {
                 r.extend(gait_cells(e.gait.as_ref()));
@@ -284,7 +284,7 @@ pub fn render_table(report: &EvalReport) -> String {
             String::new(),
             ret,
             format!("{:.1}", m.length),
-            format_number(m.q0),
+            opt_number(m.q0),
         ];
         if walk {
             let mut cells = gait_cells(m.gait.as_ref());

@@ -9,6 +9,7 @@ pub mod compare;
 pub mod eval;
 pub mod record;
 pub mod signals;
+pub mod study;
 pub mod train;
 
 /// How a user runs this binary, for the commands messages suggest: `esrl` when the `esrl` on

@@ -13,6 +13,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => esrl::eval::run(args),
         Command::Compare(args) => esrl::compare::run(args),
         Command::Record(args) => esrl::record::run(args),
+        Command::Study(args) => esrl::study::run(args),
     };
     // A stop signal ends a command with the conventional status once its checkpoint is
     // written, whether the command then returned normally or with the error saying so.

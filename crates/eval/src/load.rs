@@ -65,6 +65,15 @@ pub fn locate_pick(path: &Path, pick: Pick) -> Result<(PathBuf, PathBuf)> {
             path.display()
         );
     }
+    // A policy folder that keeps the actor alone (a study record's `policy/`): it has its
+    // own config.toml and no checkpoint inside.
+    if path.join("actor.safetensors").is_file()
+        && !path.join("agent.safetensors").exists()
+        && path.join(RunDir::CONFIG).is_file()
+        && checkpoint::find(path).is_none()
+    {
+        return Ok((path.to_path_buf(), path.to_path_buf()));
+    }
     // A checkpoint folder (it holds the weights; checkpoints also keep a copy of the run's
     // config.toml, so test for the weights first).
     if path.join("agent.safetensors").is_file() {

@@ -138,8 +138,9 @@ pub struct EpisodeEval {
     pub ret: f64,
     /// Steps taken.
     pub length: usize,
-    /// Q₀: the critics' estimate at the first state and the deterministic action.
-    pub q0: f64,
+    /// Q₀: the critics' estimate at the first state and the deterministic action; `null` for
+    /// a policy folder that keeps the actor alone.
+    pub q0: Option<f64>,
     /// Ended by a fall or success.
     pub terminated: bool,
     /// Ended by the time limit.
@@ -163,8 +164,8 @@ pub struct EvalMean {
     pub return_sd: Option<f64>,
     /// Mean length (steps).
     pub length: f64,
-    /// Mean Q₀.
-    pub q0: f64,
+    /// Mean Q₀ (`null` without critics).
+    pub q0: Option<f64>,
     /// Episodes that fell.
     pub falls: usize,
     /// Episodes that reached the end of the track.
@@ -339,7 +340,8 @@ fn evaluate_episode(loaded: &LoadedRun, seed: u64, record: Option<&Path>) -> Res
         seed,
         ret: rollout.ret,
         length: rollout.length,
-        q0: loaded.agent.q0(&rollout.first_obs),
+        q0: esrl_run::checkpoint::has_critics(&loaded.checkpoint)
+            .then(|| loaded.agent.q0(&rollout.first_obs)),
         terminated: rollout.terminated,
         truncated: rollout.truncated,
         gait,
@@ -417,7 +419,11 @@ fn aggregate(episodes: &[EpisodeEval]) -> Result<EvalMean> {
         ret: ret.mean,
         return_sd: ret.sd,
         length: mean_of(episodes.iter().map(|e| e.length as f64)),
-        q0: mean_of(episodes.iter().map(|e| e.q0)),
+        q0: episodes
+            .iter()
+            .map(|e| e.q0)
+            .collect::<Option<Vec<f64>>>()
+            .map(|q| mean_of(q.into_iter())),
         falls: gaits.iter().filter(|g| g.fell).count(),
         finished: gaits.iter().filter(|g| g.track_time.is_some()).count(),
         gait: mean_gait(&gaits),

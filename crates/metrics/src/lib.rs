@@ -4,7 +4,8 @@
 //!
 //! - [`CurveSummary`] and friends: AUC, nAUC, Final-50, Best-Win-50, Episodes-to-Target and
 //!   the per-method target (80% of the median Best-Win-50 over the method's seeds);
-//! - [`mean_sd`]: mean ± sample SD across seeds;
+//! - [`mean_sd`]: mean ± sample SD across seeds; [`iqm_interval`], [`wilson`] and
+//!   [`probability_of_improvement_interval`]: the interval estimates of `rliable`;
 //! - [`gait_metrics`]: behaviour of one evaluation rollout from a [`GaitTrace`], including
 //!   its [`GaitCycle`] (support phases, touchdowns, alternation, cadence, step length, stride
 //!   variability, the [`GaitClass`] walk/run/hop/shuffle/stand/fall) and each joint's
@@ -45,6 +46,7 @@ mod curve;
 mod cycle;
 mod error;
 mod gait;
+mod interval;
 mod motion;
 mod stats;
 mod table;
@@ -60,6 +62,10 @@ pub use cycle::{
 };
 pub use error::{MetricsError, Result};
 pub use gait::{gait_metrics, GaitMetrics, GaitOptions, GaitStep, GaitTrace};
+pub use interval::{
+    bootstrap, iqm, iqm_interval, probability_of_improvement, probability_of_improvement_interval,
+    wilson, Interval, BOOTSTRAP_REPS, Z95,
+};
 pub use motion::{joint_motion, mean_joint_motion, percentile, JointMotion};
 pub use stats::{mean_sd, MeanSd};
 pub use table::{

@@ -669,8 +669,17 @@ pub fn read_tensors(dir: &Path) -> Result<HashMap<String, Vec<f32>>> {
 }
 
 /// Loads the agent tensors of a checkpoint folder into `agent` (same architecture).
+///
+/// A policy folder with `actor.safetensors` but no `agent.safetensors` (a study record's
+/// `policy/`, kept small) loads the actor alone; [`has_critics`] says which.
 pub fn load_agent(dir: &Path, agent: &mut Agent) -> Result<()> {
     verify_manifest(dir)?;
+    if !has_critics(dir) && dir.join("actor.safetensors").is_file() {
+        let p = dir.join("actor.safetensors");
+        return agent
+            .load_actor(&p)
+            .with_context(|| format!("loading {} (does config.toml match it?)", p.display()));
+    }
     let tensors = read_tensors(dir)?;
     agent.load_state_tensors(&tensors).with_context(|| {
         format!(
@@ -678,6 +687,12 @@ pub fn load_agent(dir: &Path, agent: &mut Agent) -> Result<()> {
             dir.join("agent.safetensors").display()
         )
     })
+}
+
+/// Whether a policy folder holds the whole agent (`agent.safetensors`: critics, targets,
+/// optimiser state) and not only its actor.
+pub fn has_critics(dir: &Path) -> bool {
+    dir.join("agent.safetensors").is_file()
 }
 
 /// The replay buffer a checkpoint folder names, for looking inside a run

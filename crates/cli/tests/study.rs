@@ -1,0 +1,244 @@
+//! Contract: `esrl study run` trains a study file's arms × seeds into records that do not
+//! depend on how it was run: stopped with SIGINT part-way and run again it gives the records
+//! of an uninterrupted run, and `--shard 0/2` + `--shard 1/2` give those of the whole; `esrl
+//! study status` and `report` read them (Wilson and bootstrap intervals, every run, Table 1).
+#![cfg(unix)]
+
+mod common;
+
+use common::{fails, ok, read_json};
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const STUDY: &str = r#"
+description = "smoke study"
+seeds = 2
+[eval]
+episodes = 2
+[[arm]]
+name = "essac"
+agent = "es-sac"
+preset = "smoke"
+generations = 6
+[[arm]]
+name = "sac"
+agent = "sac"
+preset = "smoke"
+episodes = 6
+"#;
+
+fn write_study(dir: &Path) -> String {
+    let p = dir.join("smoke.toml");
+    std::fs::write(&p, STUDY).unwrap();
+    p.to_str().unwrap().to_owned()
+}
+
+/// Asserts two record lists are equal, naming the first file that differs.
+fn same(a: &[(String, String)], b: &[(String, String)], what: &str) {
+    assert_eq!(
+        a.iter().map(|x| &x.0).collect::<Vec<_>>(),
+        b.iter().map(|x| &x.0).collect::<Vec<_>>(),
+        "{what}: the same records"
+    );
+    for (x, y) in a.iter().zip(b) {
+        assert_eq!(x.1, y.1, "{what}: {} differs", x.0);
+    }
+}
+
+/// Everything in a study folder's records but wall-clock times: file name → content.
+fn records(dir: &Path) -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let root = dir.join("records");
+    let mut names: Vec<_> = std::fs::read_dir(&root)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    for run in names {
+        for file in ["metrics.csv", "summary.json", "eval.json", "config.toml"] {
+            let text = std::fs::read_to_string(root.join(&run).join(file)).unwrap();
+            let text = match file {
+                "metrics.csv" => text
+                    .lines()
+                    .map(|l| l.rsplit_once(',').map_or(l, |(a, _)| a).to_owned())
+                    .collect::<Vec<_>>()
+                    .join("\n"),
+                "summary.json" => {
+                    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+                    v.as_object_mut().unwrap().remove("wall_s");
+                    v.to_string()
+                }
+                _ => text,
+            };
+            out.push((format!("{run}/{file}"), text));
+        }
+        let actor = std::fs::read(root.join(&run).join("policy/actor.safetensors")).unwrap();
+        let hash = actor.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+            (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
+        });
+        out.push((format!("{run}/actor"), format!("FNV-1a {hash:016x}")));
+    }
+    out
+}
+
+#[test]
+fn a_stopped_study_resumes_to_the_records_of_an_uninterrupted_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = write_study(tmp.path());
+    let (whole, split) = (tmp.path().join("whole"), tmp.path().join("split"));
+    ok(&[
+        "study",
+        "run",
+        &study,
+        "--out",
+        whole.to_str().unwrap(),
+        "--jobs",
+        "2",
+    ]);
+    // Stopped once the first run has rows, then run again.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
+        .args([
+            "study",
+            "run",
+            &study,
+            "--out",
+            split.to_str().unwrap(),
+            "--jobs",
+            "2",
+        ])
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    let first = split.join("runs/essac-s0/metrics.jsonl");
+    while std::fs::read_to_string(&first).map_or(0, |t| t.lines().count()) < 2 {
+        assert!(started.elapsed() < Duration::from_secs(60), "no rows");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130));
+    ok(&[
+        "study",
+        "run",
+        &study,
+        "--out",
+        split.to_str().unwrap(),
+        "--jobs",
+        "2",
+    ]);
+    same(&records(&whole), &records(&split), "stopped and continued");
+
+    // Two shards make the whole.
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    ok(&[
+        "study",
+        "run",
+        &study,
+        "--out",
+        a.to_str().unwrap(),
+        "--shard",
+        "0/2",
+    ]);
+    ok(&[
+        "study",
+        "run",
+        &study,
+        "--out",
+        b.to_str().unwrap(),
+        "--shard",
+        "1/2",
+    ]);
+    let mut merged = records(&a);
+    merged.extend(records(&b));
+    merged.sort();
+    let mut all = records(&whole);
+    all.sort();
+    same(&merged, &all, "two shards");
+
+    // Status and report read the folder.
+    let status = common::stdout(&["study", "status", whole.to_str().unwrap()]);
+    assert_eq!(status.matches("| recorded |").count(), 4, "{status}");
+    ok(&["study", "report", whole.to_str().unwrap()]);
+    let md = std::fs::read_to_string(whole.join("report.md")).unwrap();
+    for want in [
+        "## Per arm",
+        "| essac | 2 | 0 | 0 % [0–66 %]",
+        "## Every run",
+        "| sac-s1 |",
+        "## Table 1",
+        "## Probability of improvement",
+    ] {
+        assert!(md.contains(want), "missing {want:?} in:\n{md}");
+    }
+    let json = common::stdout(&["study", "report", whole.to_str().unwrap(), "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(v["runs"].as_array().unwrap().len(), 4);
+    // A record's policy folder is evaluated again to the same numbers.
+    let policy = whole.join("records/essac-s1/policy");
+    let again = tmp.path().join("again.json");
+    ok(&[
+        "eval",
+        policy.to_str().unwrap(),
+        "--episodes",
+        "2",
+        "--seed",
+        "1000",
+        "--out",
+        again.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        read_json(&again)["episodes"][1]["return"],
+        read_json(&whole.join("records/essac-s1/eval.json"))["episodes"][1]["return"]
+    );
+}
+
+#[test]
+fn a_study_folder_holds_one_study_and_bad_files_are_named() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = write_study(tmp.path());
+    let out = tmp.path().join("out");
+    let other = tmp.path().join("other.toml");
+    std::fs::write(&other, STUDY.replace("seeds = 2", "seeds = 1")).unwrap();
+    ok(&[
+        "study",
+        "run",
+        other.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = fails(&["study", "run", &study, "--out", out.to_str().unwrap()]);
+    assert!(err.contains("holds another study"), "{err}");
+    let bad = tmp.path().join("bad.toml");
+    for (text, want) in [
+        ("seeds = 2\n", "arm"),
+        (
+            "seeds = 2\n[[arm]]\nname = \"a b\"\nagent = \"sac\"\n",
+            "arm name",
+        ),
+        (
+            "seeds = 2\n[[arm]]\nname = \"a\"\nagent = \"sac\"\nset = { seed = 3 }\n",
+            "seed",
+        ),
+        (
+            "seeds = 2\n[[arm]]\nname = \"a\"\nagent = \"sac\"\nset = { rl = { gamma = 7.0 } }\n",
+            "gamma",
+        ),
+    ] {
+        std::fs::write(&bad, text).unwrap();
+        let err = fails(&[
+            "study",
+            "run",
+            bad.to_str().unwrap(),
+            "--out",
+            tmp.path().join("x").to_str().unwrap(),
+        ]);
+        assert!(err.contains(want), "{text}: {err}");
+    }
+    let err = fails(&["study", "report", tmp.path().to_str().unwrap()]);
+    assert!(err.contains("not a study folder"), "{err}");
+}
