@@ -742,15 +742,15 @@ fn report(dir: &Path, json_out: bool) -> Result<()> {
         } else {
             Some(iqm_interval(&walked, 100 + a as u64)?)
         };
+        let rate_text = format!(
+            "{:.0} % [{:.0}–{:.0} %]",
+            100.0 * rate.estimate,
+            100.0 * rate.lo,
+            100.0 * rate.hi
+        );
         md.push_str(&format!(
-            "| {} | {n} | {k} | {} | {} | {} of {n} | {} |\n",
+            "| {} | {n} | {k} | {rate_text} | {} | {} of {n} | {} |\n",
             arm.name,
-            format!(
-                "{:.0} % [{:.0}–{:.0} %]",
-                100.0 * rate.estimate,
-                100.0 * rate.lo,
-                100.0 * rate.hi
-            ),
             interval_text(&bw_iqm, 0, 1.0),
             walked.len(),
             steps_iqm.map_or("–".into(), |i| interval_text(&i, 2, 1e-6) + " M"),
