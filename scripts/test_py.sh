@@ -25,6 +25,10 @@ venv_python="$root/.venv/bin/python"
 # Ray is optional for users (`pip install "./py[ray]"`) but tested here: `python -m esrl_rs.ray`
 # against `esrl train` on a local cluster (py/tests/test_ray.py).
 "$venv_python" -m pip install --quiet --disable-pip-version-check "ray>=2.9"
+# moviepy lets Gymnasium's RecordVideo write the walk's frames (render_mode="rgb_array");
+# its test is skipped without it.
+"$venv_python" -m pip install --quiet --disable-pip-version-check moviepy \
+    || echo "test_py.sh: moviepy not installed; RecordVideo is not tested" >&2
 # pandas is optional (Run.to_pandas); its test is skipped without it.
 "$venv_python" -m pip install --quiet --disable-pip-version-check pandas \
     || echo "test_py.sh: pandas not installed; Run.to_pandas() is not tested" >&2

@@ -132,3 +132,13 @@ def test_sigint_stops_after_the_generation_with_a_checkpoint(tmp_path: Path) -> 
     state = json.loads((out / "checkpoint" / "state.json").read_text())
     assert 3 <= state["rows"] < 2000
     assert state["rows"] == len(rows(out))
+
+
+def test_an_existing_run_folder_is_an_error_not_a_traceback(tmp_path: Path) -> None:
+    out = str(tmp_path / "run")
+    ray_train(*SMOKE, "--out", out, "--address", "local", "--workers", "1")
+    cmd = [sys.executable, "-m", "esrl_rs.ray", "train", *SMOKE, "--out", out]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 2, proc.stderr[-2000:]
+    assert "already holds a run" in proc.stderr and "--resume" in proc.stderr
+    assert "Traceback" not in proc.stderr

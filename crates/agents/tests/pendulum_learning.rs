@@ -7,8 +7,20 @@ use esrl_agents::{Agent, Algo, NetConfig, RlConfig, Trainer};
 use esrl_nn::{ActorConfig, CriticConfig};
 use esrl_sim::{Env, Pendulum};
 
-/// Trains for `episodes` 200-step episodes and returns the mean return of the last 10.
+/// Trains for `episodes` 200-step episodes and returns the mean return of the last 10, on a
+/// pool of one thread: the test harness runs the tests side by side, and one rayon pool per
+/// test sized to every core would put several threads on each core, where the update's
+/// fine-grained parallel steps wait for descheduled threads (the result does not depend on
+/// the thread count).
 fn train(algo: Algo, nets: &NetConfig, cfg: &RlConfig, seed: u64, episodes: usize) -> f64 {
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    pool.install(|| train_here(algo, nets, cfg, seed, episodes))
+}
+
+fn train_here(algo: Algo, nets: &NetConfig, cfg: &RlConfig, seed: u64, episodes: usize) -> f64 {
     let mut env = Pendulum::new();
     let agent = Agent::new(algo, env.obs_dim(), env.act_dim(), nets, cfg, seed).unwrap();
     let mut trainer = Trainer::new(agent, seed);

@@ -78,16 +78,9 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
         .max_env_steps
         .map(|s| format!(", at most {s} env steps"))
         .unwrap_or_default();
-    let typical = match (cfg.preset, cfg.agent.is_hybrid(), cfg.env) {
-        (Preset::Paper, true, EnvKind::Walk) => {
-            "\n  time:   the paper's budget: hours (5–8 h for ES-SAC on 2 cores, by its own ETA); \
-             `--preset quick` shows learning in a few minutes"
-        }
-        (Preset::Walking, _, EnvKind::Walk) => {
-            "\n  time:   4 million env steps: about 1.5 h for ES-SAC on one core (results/walking)"
-        }
-        _ => "",
-    };
+    let typical = cfg
+        .typical_time()
+        .map_or(String::new(), |t| format!("\n  time:   {t}"));
     format!(
         "esrl train {agent} · preset {preset} · env {env} · seed {seed}{action}\n  \
          budget: {budget}{steps}{typical}\n  \

@@ -411,6 +411,22 @@ impl TrainConfig {
         self.check = Some(CheckConfig::default());
     }
 
+    /// What a run of this configuration takes on a 2-core machine, as measured
+    /// (`results/speed/README.md`): the one place the banner and the README take their time
+    /// statements from (`crates/cli/tests/readme_times.rs` keeps the README in step). `None`
+    /// where nothing was measured.
+    pub fn typical_time(&self) -> Option<&'static str> {
+        match (self.preset, self.env, self.agent) {
+            (Preset::Walking, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_WALKING),
+            (Preset::Quick, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_QUICK),
+            (Preset::Paper, EnvKind::Walk, a) if a.is_hybrid() => Some(TIME_PAPER),
+            (Preset::Walking | Preset::Paper, EnvKind::Pendulum, AgentKind::Sac) => {
+                Some(TIME_PENDULUM)
+            }
+            _ => None,
+        }
+    }
+
     /// Applies the flags a resumed run may change too: `--generations`, `--episodes`,
     /// `--steps`, `--threads` and `--until`.
     pub fn apply_budget(&mut self, opts: &Overrides) {
@@ -587,6 +603,19 @@ impl TrainConfig {
         Ok(())
     }
 }
+
+/// The default command's time (`esrl train es-sac`, preset `walking`): measured on the 2-core
+/// AMD EPYC machine of `results/speed/` (80,000 steps in 39.5 s at 2 threads, so 4 M steps
+/// at the same rate; two full runs side by side at one thread each took 72–73 min).
+pub const TIME_WALKING: &str =
+    "about 33 min at --threads 2 on an idle 2-core machine; 72 min of one core each when two run side by side";
+/// `--preset quick` for ES-SAC (52 s measured at 2 threads, `results/speed/`).
+pub const TIME_QUICK: &str = "about 1 min at --threads 2 (52 s measured)";
+/// `--preset paper` for an ES agent: the paper's 1500 generations.
+pub const TIME_PAPER: &str =
+    "hours: 1500 generations of 25 individuals (5–8 h for ES-SAC on 2 cores, by its own ETA)";
+/// `train sac --env pendulum` (12 s measured at 2 threads, `results/speed/`).
+pub const TIME_PENDULUM: &str = "about 12 s";
 
 /// Most gradient updates per generation a run may ask for (`inner_cycles`).
 pub const MAX_INNER_CYCLES: usize = 100_000;
