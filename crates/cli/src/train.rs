@@ -2,7 +2,7 @@
 //! training session (`esrl_run::Training`), printing the start banner, a progress bar or
 //! log lines, the pace, and how to resume; stop signals end the loop at a row boundary.
 
-use crate::args::{EnvKind, Preset, TrainArgs};
+use crate::args::{EnvKind, TrainArgs};
 use crate::signals;
 use anyhow::Result;
 use esrl_agents::Learner;
