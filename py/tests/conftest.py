@@ -61,10 +61,11 @@ def cli_train(esrl_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> Calla
 
 @pytest.fixture(scope="session")
 def cli_eval(esrl_bin: Path) -> Callable[..., Dict[str, Any]]:
-    """Runs `esrl eval RUN --episodes K` and returns the eval.json it wrote."""
+    """Runs `esrl eval RUN --last --episodes K` (the run's last checkpoint, the policy
+    `esrl_rs.load_policy(RUN)` loads) and returns the RUN/eval.json it wrote."""
 
     def evaluate(run: Path, episodes: int = 1) -> Dict[str, Any]:
-        cmd = [str(esrl_bin), "eval", str(run), "--episodes", str(episodes)]
+        cmd = [str(esrl_bin), "eval", str(run), "--last", "--episodes", str(episodes)]
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
         if proc.returncode != 0 or not (run / "eval.json").is_file():
             no_cli(f"`{' '.join(cmd)}` did not write eval.json (exit {proc.returncode}): "

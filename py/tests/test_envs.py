@@ -242,7 +242,8 @@ def test_threads_give_the_sequential_results() -> None:
     for a, b in zip(sequential, parallel):
         np.testing.assert_array_equal(a[-1][0], b[-1][0])
     # one environment shared by threads: steps are serialised, never a deadlock or a crash
-    env = esrl_rs.WalkEnv()
+    # (joint-angle targets: a zero action holds the standing pose, so no step ends it)
+    env = esrl_rs.WalkEnv({"action": "target"})
     env.reset(seed=0)
     with ThreadPoolExecutor(4) as pool:
         results = list(pool.map(lambda _: env.step(np.zeros(6, dtype=np.float32)), range(40)))
