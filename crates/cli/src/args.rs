@@ -157,6 +157,17 @@ pub struct EvalArgs {
     /// keep their metrics.
     #[arg(long, default_value_t = 10)]
     pub traces: usize,
+    /// Evaluate under a disturbance, KIND=VALUE (repeatable): push_sagittal, push_lateral
+    /// (m/s, every 5 s), friction (coefficient; 1 is the task's), mass, strength (scales),
+    /// slope (degrees, positive uphill), obs_noise (SD of the scaled observation), delay
+    /// (control steps).
+    #[arg(long, value_name = "KIND=VALUE")]
+    pub perturb: Vec<String>,
+    /// Also run the robustness card: the policy under pushes, friction, mass, strength,
+    /// slopes, noise and delay at several magnitudes, --episodes each (into the report's
+    /// `robustness`).
+    #[arg(long)]
+    pub robustness: bool,
 }
 
 /// `esrl compare`.

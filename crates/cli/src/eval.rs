@@ -4,7 +4,8 @@
 use crate::args::{EnvKind, EvalArgs};
 use anyhow::{bail, Result};
 use esrl_eval::{
-    eval_path, evaluate_with, load_run_pick, EvalOptions, EvalReport, LoadedRun, Pick,
+    card, card_markdown, eval_path, evaluate_with, load_run_pick, standard_set, Disturbance,
+    EvalOptions, EvalReport, LoadedRun, Pick,
 };
 use esrl_metrics::{format_number, gait_classes_text, GaitCycle, GaitMetrics, JointMotion};
 use esrl_run::checkpoint::{BestInfo, BEST_INFO};
@@ -18,22 +19,64 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     if let Some(out) = &args.out {
         check_output(out, args.force)?;
     }
+    let perturb = args
+        .perturb
+        .iter()
+        .map(|p| Disturbance::parse(p))
+        .collect::<esrl_run::Result<Vec<_>>>()?;
     let pick = if args.last { Pick::Last } else { Pick::Kept };
-    let loaded = load_run_pick(&args.path, pick)?;
-    eprintln!("evaluating {}", which_policy(&loaded));
+    let kept = load_run_pick(&args.path, pick)?;
+    eprintln!("evaluating {}", which_policy(&kept));
+    let loaded = if perturb.is_empty() {
+        kept
+    } else {
+        let mut walk = kept.config.walk.clone();
+        for d in &perturb {
+            d.apply(&mut walk);
+        }
+        eprintln!(
+            "under {}",
+            perturb
+                .iter()
+                .map(|d| {
+                    let (v, unit) = d.magnitude();
+                    format!("{} {v} {unit}", d.name())
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        kept.with_walk(walk)?
+    };
     crate::signals::install();
     let stop = || crate::signals::requested().is_some();
     let options = EvalOptions {
         traces: args.traces,
         stop: Some(&stop),
     };
-    let report = evaluate_with(
+    let mut report = evaluate_with(
         &loaded,
         args.seed,
         args.episodes,
         args.record.as_deref(),
         &options,
     )?;
+    report.perturb = perturb;
+    if args.robustness {
+        eprintln!(
+            "robustness card: {} disturbances × {} episodes",
+            standard_set().len(),
+            args.episodes
+        );
+        let rows = card(
+            &loaded,
+            args.seed,
+            args.episodes,
+            &standard_set(),
+            Some(&stop),
+        )?;
+        println!("{}", card_markdown(&rows));
+        report.robustness = Some(rows);
+    }
     if report.episodes.len() < report.requested {
         eprintln!(
             "stopped: {} of {} episodes evaluated; the report holds those",

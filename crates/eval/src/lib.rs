@@ -8,6 +8,8 @@
 //! - [`report`]: K episodes in parallel → [`EvalReport`] with the gait metrics of SPEC §6,
 //!   written to `RUN/eval.json`.
 //! - [`stick`]: the robot's side view along an episode; [`recording`]: MCAP for Foxglove.
+//! - [`robustness`]: the policy under pushes, friction, mass, strength, slopes, noise and
+//!   delay (`esrl eval --perturb`, `--robustness`).
 //!
 //! ```no_run
 //! let loaded = esrl_eval::load_run(std::path::Path::new("runs/es-sac-s0"))?;
@@ -18,8 +20,8 @@
 //!
 //! # Limitations
 //!
-//! - Evaluation is deterministic (tanh μ) and on the run's own environment settings; it does
-//!   not test robustness to pushes, slopes or model changes.
+//! - Evaluation is deterministic (tanh μ) and on the run's own environment settings unless a
+//!   disturbance is asked for ([`robustness`]).
 //! - A 60 s walking episode adds about 0.4 MB of trace to `eval.json`; `esrl eval` keeps the
 //!   traces of the first 10 episodes unless asked (`--traces`).
 
@@ -27,6 +29,7 @@ pub mod episode;
 pub mod load;
 pub mod recording;
 pub mod report;
+pub mod robustness;
 pub mod stick;
 
 pub use episode::{rollout, walk_episode, Rollout, WalkEpisode};
@@ -36,4 +39,5 @@ pub use report::{
     eval_path, evaluate, evaluate_and_write, evaluate_with, mean_gait, EpisodeEval, EvalMean,
     EvalOptions, EvalReport, Trace, EVAL_FILE,
 };
+pub use robustness::{card, card_markdown, standard_set, CardRow, Disturbance};
 pub use stick::{animated_svg, render_rgb, StickFigure, StickRecorder, DEFAULT_INTERVAL};

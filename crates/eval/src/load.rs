@@ -23,6 +23,21 @@ pub struct LoadedRun {
 }
 
 impl LoadedRun {
+    /// The same policy on the walking task `walk` (a disturbed copy of the run's own, for
+    /// robustness tests), checked.
+    pub fn with_walk(&self, walk: esrl_sim::WalkConfig) -> Result<LoadedRun> {
+        walk.validate().context("the disturbed walking task")?;
+        let mut config = self.config.clone();
+        config.walk = walk;
+        Ok(LoadedRun {
+            run: self.run.clone(),
+            checkpoint: self.checkpoint.clone(),
+            config,
+            agent: self.agent.clone(),
+            model: self.model.clone(),
+        })
+    }
+
     /// A fresh walking environment of this run (`None` for a pendulum run).
     pub fn walk_env(&self) -> Result<Option<WalkEnv>> {
         match &self.model {

@@ -197,6 +197,13 @@ pub struct EvalReport {
     pub episodes: Vec<EpisodeEval>,
     /// Aggregates over the episodes.
     pub mean: EvalMean,
+    /// The disturbances the episodes ran under (`esrl eval --perturb`; empty: none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub perturb: Vec<crate::robustness::Disturbance>,
+    /// The robustness card (`esrl eval --robustness`): the policy under each disturbance of
+    /// the standard set.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robustness: Option<Vec<crate::robustness::CardRow>>,
 }
 
 /// Evaluates `loaded` on `episodes` deterministic episodes with seeds `seed, seed + 1, …`
@@ -290,6 +297,8 @@ pub fn evaluate_with(
         track_length,
         episodes: results,
         mean,
+        perturb: Vec::new(),
+        robustness: None,
     })
 }
 

@@ -242,6 +242,6 @@ pub use model::{
 pub use pendulum::Pendulum;
 pub use sim::{Base, LimitModel, PhysicsConfig, RobotSim, RobotState, SimSetup};
 pub use walk::{
-    ActionMode, FallConfig, GaitClock, InitNoise, Mirror, ObsLayout, ResetConfig, ResetPose,
-    RewardConfig, TargetGains, UprightGate, WalkConfig, WalkEnv,
+    ActionMode, FallConfig, GaitClock, InitNoise, Mirror, ObsLayout, Perturb, PushDirection,
+    ResetConfig, ResetPose, RewardConfig, TargetGains, UprightGate, WalkConfig, WalkEnv,
 };

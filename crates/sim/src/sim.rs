@@ -79,6 +79,23 @@ pub struct PhysicsConfig {
     pub limit_frequency: f32,
     /// `soft`: damping ratio of the limit spring. Default 1 (critical).
     pub limit_damping_ratio: f32,
+    /// Every link's mass and inertia times this (a payload spread over the body, or a
+    /// lighter build): a disturbance for robustness tests. Default 1 (the URDF's).
+    #[serde(skip_serializing_if = "is_one")]
+    pub mass_scale: f32,
+    /// Ground slope, rad, positive uphill along +x: gravity is tilted by this angle about
+    /// the lateral (y) axis, `g·(−sin s, 0, −cos s)`, so the flat ground acts as a slope.
+    /// Default 0 (flat).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub slope: f32,
+}
+
+fn is_one(v: &f32) -> bool {
+    *v == 1.0
+}
+
+fn is_zero(v: &f32) -> bool {
+    *v == 0.0
 }
 
 impl Default for PhysicsConfig {
@@ -94,6 +111,8 @@ impl Default for PhysicsConfig {
             limit_band: 2.0f32.to_radians(),
             limit_frequency: 20.0,
             limit_damping_ratio: 1.0,
+            mass_scale: 1.0,
+            slope: 0.0,
         }
     }
 }
@@ -152,6 +171,16 @@ impl PhysicsConfig {
                 self.limit_frequency.to_string(),
                 "must be finite and > 0",
             );
+        }
+        if !(self.mass_scale.is_finite() && self.mass_scale > 0.0 && self.mass_scale <= 100.0) {
+            return bad(
+                "mass_scale",
+                self.mass_scale.to_string(),
+                "must be in (0, 100]",
+            );
+        }
+        if !(self.slope.is_finite() && self.slope.abs() < std::f32::consts::FRAC_PI_4) {
+            return bad("slope", self.slope.to_string(), "must be within ±π/4 rad");
         }
         if !(self.limit_damping_ratio.is_finite() && self.limit_damping_ratio >= 0.0) {
             return bad(
@@ -284,8 +313,15 @@ impl RobotSim {
     /// their mass properties, then their colliders), the joints, the joint state, and a
     /// zero-length step that applies it all.
     pub(crate) fn build(model: Arc<RobotModel>, setup: &SimSetup, state: &RobotState) -> Self {
+        let (g, slope) = (setup.physics.gravity, setup.physics.slope);
+        // Flat ground exactly as before slopes existed (no −0 along x).
+        let gravity = if slope == 0.0 {
+            Vector::new(0.0, 0.0, -g)
+        } else {
+            Vector::new(-g * slope.sin(), 0.0, -g * slope.cos())
+        };
         let mut world = PhysicsWorld {
-            gravity: Vector::new(0.0, 0.0, -setup.physics.gravity),
+            gravity,
             ..PhysicsWorld::default()
         };
         world.integration_parameters.dt = setup.dt;
@@ -568,6 +604,35 @@ impl RobotSim {
         self.time += self.dt as f64;
     }
 
+    /// Adds `dv` (m/s, world frame) to the linear velocity of the root link's centre of mass
+    /// (a floating base's first three generalised velocities): a push, an impulse of
+    /// `m_root·dv` to the root. Nothing for a fixed base.
+    pub fn push_root(&mut self, dv: [f32; 3]) {
+        let Some(index) = self.multibody else { return };
+        let root_free = self
+            .world
+            .multibody_joints
+            .get_multibody(index)
+            .is_some_and(|mb| {
+                mb.ndofs()
+                    >= 6 + self
+                        .model
+                        .joints()
+                        .iter()
+                        .filter(|j| j.is_movable())
+                        .count()
+            });
+        if !root_free {
+            return;
+        }
+        if let Some(mb) = self.world.multibody_joints.get_multibody_mut(index) {
+            let mut v = mb.generalized_velocity_mut();
+            for (k, d) in dv.iter().enumerate() {
+                v[k] += d;
+            }
+        }
+    }
+
     /// Whether a step failed inside Rapier (a state that blew up to NaN); the world then
     /// stands still and [`Self::joint_position`] reads NaN.
     pub fn is_broken(&self) -> bool {
@@ -760,10 +825,11 @@ fn add_links(
                 }
             }
             // glam matrices are column-major; the tensor is symmetric, so either reading works.
-            let m = Matrix::from_cols_array_2d(&inertia);
+            let scale = setup.physics.mass_scale;
+            let m = Matrix::from_cols_array_2d(&inertia) * scale;
             builder = builder.additional_mass_properties(MassProperties::with_inertia_matrix(
                 Vector::new(c[0] as f32, c[1] as f32, c[2] as f32),
-                link.mass as f32,
+                link.mass as f32 * scale,
                 m,
             ));
         }

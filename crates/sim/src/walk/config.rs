@@ -301,6 +301,144 @@ impl Default for InitNoise {
     }
 }
 
+/// Which way a push kicks ([`Perturb::push_direction`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PushDirection {
+    /// Forward or backward (±x), the sign drawn per push.
+    Sagittal,
+    /// Left or right (±y), the sign drawn per push.
+    Lateral,
+    /// Any horizontal direction, the angle drawn per push.
+    Any,
+}
+
+/// Disturbances for robustness tests (`[walk.perturb]`): pushes, motor strength,
+/// observation noise and action delay; with the physics' `friction`, `mass_scale` and
+/// `slope` they make the disturbance set of `esrl eval --perturb`. Every default leaves
+/// the task as it is. The draws (push times and directions, observation noise) come from a
+/// ChaCha8 stream of the reset seed of its own, so a disturbed episode is as repeatable as
+/// an undisturbed one and draws nothing from the reset's own stream.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Perturb {
+    /// Speed of each push, m/s: a horizontal velocity change of the whole robot (the root's
+    /// velocity changes by it with the joint velocities held, so every link's does; an
+    /// impulse of `mass · push_speed` on the body), the way legged-robot training kicks its
+    /// bases (legged_gym's `push_robots`). Default 0 (no pushes).
+    pub push_speed: f32,
+    /// Mean seconds between pushes: the k-th push comes at `k·push_every` s plus a jitter of
+    /// up to ±¼ of it drawn per push. Default 5.
+    pub push_every: f32,
+    /// Which way pushes kick. Default `any`.
+    pub push_direction: PushDirection,
+    /// Motor strength: every actuated joint's effort limit (torque at action ±1, the servo's
+    /// torque bound) times this. Default 1.
+    pub strength: f32,
+    /// Standard deviation of Gaussian noise added to every observation entry (after the
+    /// scaling of `normalize_obs`, so in units of order one). Default 0.
+    pub obs_noise: f32,
+    /// Control steps between an action and its effect: the joints get the action of this
+    /// many steps before (zero before the first). Default 0.
+    pub action_delay: u32,
+    /// Domain randomisation for training: per episode, the ground friction coefficient drawn
+    /// uniformly from `[lo, hi]` (replacing `physics.friction`). Default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_range: Option<[f32; 2]>,
+    /// Per episode, `physics.mass_scale` drawn uniformly from `[lo, hi]`. Default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mass_range: Option<[f32; 2]>,
+    /// Per episode, `strength` drawn uniformly from `[lo, hi]`. Default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub strength_range: Option<[f32; 2]>,
+}
+
+impl Default for Perturb {
+    fn default() -> Self {
+        Self {
+            push_speed: 0.0,
+            push_every: 5.0,
+            push_direction: PushDirection::Any,
+            strength: 1.0,
+            obs_noise: 0.0,
+            action_delay: 0,
+            friction_range: None,
+            mass_range: None,
+            strength_range: None,
+        }
+    }
+}
+
+impl Perturb {
+    /// Whether every setting leaves the task undisturbed.
+    pub fn is_none(&self) -> bool {
+        self.push_speed == 0.0
+            && self.strength == 1.0
+            && self.obs_noise == 0.0
+            && self.action_delay == 0
+            && self.friction_range.is_none()
+            && self.mass_range.is_none()
+            && self.strength_range.is_none()
+    }
+
+    fn validate(&self) -> Result<(), SimError> {
+        let check = |field: &str, v: f32, ok: bool, why: &str| {
+            if v.is_finite() && ok {
+                Ok(())
+            } else {
+                Err(config_err(&format!("perturb.{field}"), v, why))
+            }
+        };
+        check(
+            "push_speed",
+            self.push_speed,
+            (0.0..=20.0).contains(&self.push_speed),
+            "must be in [0, 20] m/s",
+        )?;
+        check(
+            "push_every",
+            self.push_every,
+            self.push_every >= 0.1,
+            "must be ≥ 0.1 s",
+        )?;
+        check(
+            "strength",
+            self.strength,
+            self.strength > 0.0 && self.strength <= 10.0,
+            "must be in (0, 10]",
+        )?;
+        check(
+            "obs_noise",
+            self.obs_noise,
+            (0.0..=10.0).contains(&self.obs_noise),
+            "must be in [0, 10]",
+        )?;
+        for (field, range, lo, hi) in [
+            ("friction_range", self.friction_range, 0.0, 10.0),
+            ("mass_range", self.mass_range, 0.01, 100.0),
+            ("strength_range", self.strength_range, 0.01, 10.0),
+        ] {
+            if let Some([a, b]) = range {
+                if !(a.is_finite() && b.is_finite() && lo <= a && a <= b && b <= hi) {
+                    return Err(config_err(
+                        &format!("perturb.{field}"),
+                        format!("[{a}, {b}]"),
+                        "must be [lo, hi] with lo ≤ hi inside the field's bounds",
+                    ));
+                }
+            }
+        }
+        if self.action_delay > 100 {
+            return Err(config_err(
+                "perturb.action_delay",
+                self.action_delay,
+                "must be at most 100 control steps",
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Configuration of [`WalkEnv`](super::WalkEnv). Every field has a default; TOML files may give any subset.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -356,6 +494,9 @@ pub struct WalkConfig {
     /// in front of the ankles, as in quiet human standing (Winter 1995, "Human balance and
     /// posture control during standing and walking", Gait & Posture 3:193–214).
     pub standing_pose: BTreeMap<String, f32>,
+    /// Disturbances for robustness tests ([`Perturb`]). Default none.
+    #[serde(skip_serializing_if = "Perturb::is_none")]
+    pub perturb: Perturb,
 }
 
 impl Default for WalkConfig {
@@ -394,6 +535,7 @@ impl Default for WalkConfig {
             .to_vec(),
             foot_links: ["left_foot".into(), "right_foot".into()],
             standing_pose,
+            perturb: Perturb::default(),
         }
     }
 }
@@ -441,6 +583,7 @@ impl WalkConfig {
         }
         pos("track_length", self.track_length)?;
         self.physics.validate("physics.")?;
+        self.perturb.validate()?;
         fin("reward.forward", self.reward.forward)?;
         fin("reward.lateral", self.reward.lateral)?;
         fin("reward.height", self.reward.height)?;

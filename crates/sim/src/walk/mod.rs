@@ -145,11 +145,13 @@ mod setup;
 
 use std::sync::Arc;
 
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 use rapier3d::prelude::Vector;
 
 pub use config::{
-    ActionMode, FallConfig, GaitClock, InitNoise, ResetConfig, ResetPose, RewardConfig,
-    TargetGains, UprightGate, WalkConfig,
+    ActionMode, FallConfig, GaitClock, InitNoise, Perturb, PushDirection, ResetConfig, ResetPose,
+    RewardConfig, TargetGains, UprightGate, WalkConfig,
 };
 pub use mirror::Mirror;
 pub use observation::ObsLayout;
@@ -180,6 +182,61 @@ pub struct WalkEnv {
     start_phase: Option<f32>,
     /// Each foot's contact phase, for the gait clock's chatter term.
     feet: reward::FootPhases,
+    /// The disturbances' state (`[walk.perturb]`).
+    disturb: Disturb,
+}
+
+/// The state of `[walk.perturb]`'s disturbances in an episode: their random stream, the time
+/// of the next push, and the actions still waiting to act.
+struct Disturb {
+    rng: ChaCha8Rng,
+    next_push: f32,
+    delayed: std::collections::VecDeque<Vec<f32>>,
+    /// This episode's motor strength (`strength`, or drawn from `strength_range`).
+    strength: f32,
+}
+
+/// Mixed into the reset seed for the disturbances' own stream.
+const PERTURB_STREAM: u64 = 0x5045_5254_5552_4221;
+
+impl Disturb {
+    fn reset(seed: u64, p: &Perturb, n_a: usize) -> Self {
+        let mut d = Self {
+            rng: ChaCha8Rng::seed_from_u64(seed ^ PERTURB_STREAM),
+            next_push: 0.0,
+            delayed: (0..p.action_delay).map(|_| vec![0.0; n_a]).collect(),
+            strength: p.strength,
+        };
+        d.next_push = d.jittered(p.push_every);
+        d
+    }
+
+    /// A draw uniform in `[lo, hi]`.
+    fn uniform(&mut self, [lo, hi]: [f32; 2]) -> f32 {
+        if hi > lo {
+            self.rng.random_range(lo..=hi)
+        } else {
+            lo
+        }
+    }
+
+    /// `every` ± up to a quarter of it.
+    fn jittered(&mut self, every: f32) -> f32 {
+        every * (1.0 + self.rng.random_range(-0.25f32..=0.25))
+    }
+
+    /// The velocity change of a push of `speed` m/s in `direction`.
+    fn push(&mut self, speed: f32, direction: PushDirection) -> [f32; 3] {
+        let sign = if self.rng.random_bool(0.5) { 1.0 } else { -1.0 };
+        match direction {
+            PushDirection::Sagittal => [sign * speed, 0.0, 0.0],
+            PushDirection::Lateral => [0.0, sign * speed, 0.0],
+            PushDirection::Any => {
+                let a = self.rng.random_range(0.0..std::f32::consts::TAU);
+                [speed * a.cos(), speed * a.sin(), 0.0]
+            }
+        }
+    }
 }
 
 impl WalkEnv {
@@ -212,6 +269,7 @@ impl WalkEnv {
 
     fn with_sim(shared: Arc<WalkShared>, sim: RobotSim) -> Self {
         let n_a = shared.actuated.len();
+        let disturb = Disturb::reset(0, &shared.config.perturb, n_a);
         Self {
             shared,
             sim,
@@ -225,6 +283,7 @@ impl WalkEnv {
             phase0: 0.0,
             start_phase: None,
             feet: reward::FootPhases::reset([false; 2]),
+            disturb,
         }
     }
 
@@ -395,28 +454,70 @@ impl WalkEnv {
         }
     }
 
-    /// Clamps `action` (NaN reads as 0) and hands it to the joints: torques, or servo targets
-    /// (module docs, "Action").
+    /// Clamps `action` (NaN reads as 0), keeps it as the previous action of the next
+    /// observation, and hands the action due now to the joints (module docs, "Action"): this
+    /// one, or with `perturb.action_delay` = d the one of d steps before.
     fn apply_action(&mut self, action: &[f32]) {
         let s = self.shared.clone();
-        for (k, &j) in s.actuated.iter().enumerate() {
-            let a = action.get(k).copied().unwrap_or(0.0);
-            let a = if a.is_finite() {
-                a.clamp(-1.0, 1.0)
+        for (k, a) in self.prev_action.iter_mut().enumerate() {
+            let v = action.get(k).copied().unwrap_or(0.0);
+            *a = if v.is_finite() {
+                v.clamp(-1.0, 1.0)
             } else {
                 0.0
             };
-            self.prev_action[k] = a;
+        }
+        let due = if s.config.perturb.action_delay > 0 {
+            self.disturb.delayed.push_back(self.prev_action.clone());
+            self.disturb
+                .delayed
+                .pop_front()
+                .unwrap_or_else(|| vec![0.0; s.actuated.len()])
+        } else {
+            self.prev_action.clone()
+        };
+        let strength = self.disturb.strength;
+        for (k, &j) in s.actuated.iter().enumerate() {
+            let a = due[k];
+            let effort = s.effort[k] * strength;
             match s.config.action {
-                ActionMode::Torque => self.sim.set_joint_torque(j, a * s.effort[k]),
+                ActionMode::Torque => self.sim.set_joint_torque(j, a * effort),
                 ActionMode::Target => {
                     let t = &s.config.target;
                     let target = self.target_angle(k, a);
                     self.sim
-                        .set_joint_motor(j, target, t.stiffness, t.damping, s.effort[k]);
+                        .set_joint_motor(j, target, t.stiffness, t.damping, effort);
                 }
             }
         }
+    }
+
+    /// A push due now (`perturb.push_speed` > 0): the robot's velocity changes by the push,
+    /// and the next one is scheduled.
+    fn push_if_due(&mut self) {
+        let p = &self.shared.config.perturb;
+        if p.push_speed <= 0.0 {
+            return;
+        }
+        let t = self.steps as f32 * self.shared.config.control_period;
+        if t + 1e-6 >= self.disturb.next_push {
+            let dv = self.disturb.push(p.push_speed, p.push_direction);
+            self.sim.push_root(dv);
+            let every = p.push_every;
+            self.disturb.next_push += self.disturb.jittered(every);
+        }
+    }
+
+    /// The observation with `perturb.obs_noise` added.
+    fn noisy(&mut self, mut obs: Vec<f32>) -> Vec<f32> {
+        let sd = self.shared.config.perturb.obs_noise;
+        if sd > 0.0 {
+            for o in &mut obs {
+                let e: f32 = self.disturb.rng.sample(rand_distr::StandardNormal);
+                *o += sd * e;
+            }
+        }
+        obs
     }
 
     /// Runs the control period's Rapier steps, averaging each actuated joint's delivered
@@ -480,7 +581,25 @@ impl Env for WalkEnv {
     fn reset(&mut self, seed: u64) -> Vec<f32> {
         let s = self.shared.clone();
         let (state, drawn) = s.initial_state(seed);
-        self.sim = RobotSim::build(s.model.clone(), &s.setup, &state);
+        self.disturb = Disturb::reset(seed, &s.config.perturb, s.actuated.len());
+        let p = &s.config.perturb;
+        if p.friction_range.is_some() || p.mass_range.is_some() {
+            // Domain randomisation: this episode's friction and masses.
+            let mut setup = s.setup.clone();
+            if let Some(r) = p.friction_range {
+                setup.physics.friction = self.disturb.uniform(r);
+            }
+            if let Some(r) = p.mass_range {
+                setup.physics.mass_scale = self.disturb.uniform(r);
+            }
+            self.sim = RobotSim::build(s.model.clone(), &setup, &state);
+        } else {
+            self.sim = RobotSim::build(s.model.clone(), &s.setup, &state);
+        }
+        self.disturb.strength = match p.strength_range {
+            Some(r) => self.disturb.uniform(r),
+            None => p.strength,
+        };
         self.phase0 = match (&s.config.gait_clock, self.start_phase) {
             (Some(_), Some(phase)) => phase,
             _ => drawn,
@@ -493,12 +612,14 @@ impl Env for WalkEnv {
         self.last_power.fill(0.0);
         self.last_abs_power.fill(0.0);
         self.feet = reward::FootPhases::reset(self.feet_down(&s));
-        self.observation()
+        let obs = self.observation();
+        self.noisy(obs)
     }
 
     fn step(&mut self, action: &[f32]) -> Step {
         let s = self.shared.clone();
         self.apply_action(action);
+        self.push_if_due();
         self.advance_physics();
         self.steps += 1;
         let v_world = self.sim.link_origin_velocity(s.torso);
@@ -534,6 +655,7 @@ impl Env for WalkEnv {
         };
         let finite = obs.iter().all(|v| v.is_finite());
         let outcome = reward::judge(&s.config, &torso, finite, &effort, &feet);
+        let obs = self.noisy(obs);
         let terminated =
             outcome.fell || outcome.off_course || (outcome.success && s.config.end_at_finish);
         let truncated = !terminated && self.steps >= s.max_steps;

@@ -1,0 +1,256 @@
+//! Contract: the disturbances of robustness tests do what their docs say, against answers
+//! computed by hand: a push changes the whole robot's momentum by `mass · dv`; a slope tilts
+//! gravity so a free body accelerates along `g·(−sin s, 0, −cos s)`; `mass_scale` scales the
+//! mass Rapier sees; `strength` scales the torque an action commands; `action_delay` hands
+//! the joints the action of d steps before; `obs_noise` adds noise of the given spread that
+//! repeats with the seed; pushes come every `push_every` s and move the torso by about the
+//! push. With no disturbance the environment is what it was.
+
+use std::sync::Arc;
+
+use esrl_sim::{
+    Base, Env, GaitClock, Perturb, PhysicsConfig, PushDirection, RobotModel, RobotSim, RobotState,
+    SimSetup, WalkConfig, WalkEnv,
+};
+
+fn humanoid_sim(physics: PhysicsConfig, ground: bool) -> (RobotSim, Arc<RobotModel>) {
+    let model = RobotModel::humanoid_shared().unwrap();
+    let setup = SimSetup {
+        dt: 0.00625,
+        physics,
+        base: Base::Floating,
+        ground,
+        armature: vec![],
+    };
+    let state = RobotState {
+        base_position: [0.0, 0.0, 3.0],
+        q: vec![0.0; model.joints().len()],
+        qd: vec![0.0; model.joints().len()],
+    };
+    (RobotSim::new(model.clone(), &setup, &state).unwrap(), model)
+}
+
+/// Σ m·v over the links (the velocity of each link's centre of mass).
+fn momentum(sim: &RobotSim, model: &RobotModel) -> [f64; 3] {
+    let mut p = [0.0f64; 3];
+    for (l, link) in model.links().iter().enumerate() {
+        let (v, _) = sim.link_velocity(l);
+        let m = link.mass;
+        for k in 0..3 {
+            p[k] += m * f64::from(v.to_array()[k]);
+        }
+    }
+    p
+}
+
+#[test]
+fn a_push_adds_mass_times_the_velocity_change_to_the_momentum() {
+    let physics = PhysicsConfig {
+        gravity: 0.0,
+        ..PhysicsConfig::default()
+    };
+    let (mut sim, model) = humanoid_sim(physics, false);
+    let mass: f64 = model.links().iter().map(|l| l.mass).sum();
+    sim.step();
+    let before = momentum(&sim, &model);
+    let dv = [0.5f32, -0.3, 0.0];
+    sim.push_root(dv);
+    sim.step();
+    let after = momentum(&sim, &model);
+    for k in 0..3 {
+        let want = mass * f64::from(dv[k]);
+        assert!(
+            (after[k] - before[k] - want).abs() < 1e-3 * mass,
+            "axis {k}: Δp = {} vs m·dv = {want}",
+            after[k] - before[k]
+        );
+    }
+}
+
+#[test]
+fn a_slope_tilts_gravity() {
+    let s = 5.0f32.to_radians();
+    let physics = PhysicsConfig {
+        slope: s,
+        ..PhysicsConfig::default()
+    };
+    let g = physics.gravity;
+    let (mut sim, _) = humanoid_sim(physics, false);
+    let c0 = sim.center_of_mass();
+    for _ in 0..40 {
+        sim.step();
+    }
+    let t = 40.0 * 0.00625f32;
+    let d = sim.center_of_mass() - c0;
+    // Symplectic Euler: ½ a t (t + h).
+    let fall = |a: f32| 0.5 * a * t * (t + 0.00625);
+    assert!((d.x - fall(-g * s.sin())).abs() < 2e-3, "x {}", d.x);
+    assert!((d.z - fall(-g * s.cos())).abs() < 2e-3, "z {}", d.z);
+    assert!(d.y.abs() < 1e-4);
+}
+
+#[test]
+fn mass_scale_scales_what_rapier_weighs() {
+    let (sim, model) = humanoid_sim(
+        PhysicsConfig {
+            mass_scale: 1.2,
+            ..PhysicsConfig::default()
+        },
+        true,
+    );
+    let urdf: f64 = model.links().iter().map(|l| l.mass).sum();
+    assert!((f64::from(sim.total_mass()) - 1.2 * urdf).abs() < 1e-3 * urdf);
+}
+
+/// The torso held in the air (gravity off), so the legs swing freely: every step's mean
+/// delivered torques for a fixed action sequence.
+fn torques(perturb: Perturb, actions: &[[f32; 6]]) -> Vec<Vec<f32>> {
+    let cfg = WalkConfig {
+        perturb,
+        physics: PhysicsConfig {
+            gravity: 0.0,
+            ..PhysicsConfig::default()
+        },
+        ..WalkConfig::default()
+    };
+    let mut env = WalkEnv::new(cfg).unwrap();
+    env.reset(0);
+    actions
+        .iter()
+        .map(|a| env.step(a).info.gait.unwrap().joint_torque)
+        .collect()
+}
+
+#[test]
+fn strength_scales_the_commanded_torque_and_delay_postpones_it() {
+    let actions: Vec<[f32; 6]> = (0..4)
+        .map(|k| [0.1 * (k + 1) as f32, 0.2, 0.05, 0.0, 0.3, 0.05])
+        .collect();
+    let base = torques(Perturb::default(), &actions);
+    let weak = torques(
+        Perturb {
+            strength: 0.5,
+            ..Perturb::default()
+        },
+        &actions,
+    );
+    // From the same state (the first step) the torques halve exactly; after it the two
+    // runs move apart, and a joint near its limit meets the `fade` model at another angle.
+    for (x, y) in base[0].iter().zip(&weak[0]) {
+        assert!((y - 0.5 * x).abs() < 1e-4 * x.abs().max(1.0), "{x} vs {y}");
+    }
+    let late = torques(
+        Perturb {
+            action_delay: 1,
+            ..Perturb::default()
+        },
+        &actions,
+    );
+    assert!(
+        late[0].iter().all(|t| t.abs() < 1e-6),
+        "nothing before the first action"
+    );
+    for k in 1..actions.len() {
+        assert_eq!(
+            late[k],
+            base[k - 1],
+            "step {k} applies step {}'s action",
+            k - 1
+        );
+    }
+}
+
+#[test]
+fn observation_noise_has_its_spread_and_repeats_with_the_seed() {
+    let clean = WalkEnv::new(WalkConfig::default()).unwrap().reset(5);
+    let noisy_cfg = WalkConfig {
+        perturb: Perturb {
+            obs_noise: 0.1,
+            ..Perturb::default()
+        },
+        ..WalkConfig::default()
+    };
+    let mut env = WalkEnv::new(noisy_cfg).unwrap();
+    let mut diffs = Vec::new();
+    for _ in 0..20 {
+        let noisy = env.reset(5);
+        diffs.extend(noisy.iter().zip(&clean).map(|(a, b)| f64::from(a - b)));
+    }
+    // 20 identical resets: the same noise each time.
+    assert!(diffs
+        .chunks(clean.len())
+        .all(|c| c == &diffs[..clean.len()]));
+    let first = &diffs[..clean.len()];
+    let sd = (first.iter().map(|d| d * d).sum::<f64>() / first.len() as f64).sqrt();
+    // 43 draws of N(0, 0.1²): the sample SD lies within ±40 % with overwhelming probability.
+    assert!((sd - 0.1).abs() < 0.04, "sample SD {sd}");
+    let other = env.reset(6);
+    assert_ne!(other, WalkEnv::new(WalkConfig::default()).unwrap().reset(6));
+}
+
+#[test]
+fn pushes_kick_the_torso_every_push_every_seconds() {
+    let cfg = WalkConfig {
+        action: esrl_sim::ActionMode::Target,
+        gait_clock: Some(GaitClock::default()),
+        perturb: Perturb {
+            push_speed: 0.5,
+            push_every: 1.0,
+            push_direction: PushDirection::Sagittal,
+            ..Perturb::default()
+        },
+        ..WalkConfig::default()
+    };
+    let mut env = WalkEnv::new(cfg).unwrap();
+    let mut still = WalkEnv::new(WalkConfig {
+        perturb: Perturb::default(),
+        ..env.config().clone()
+    })
+    .unwrap();
+    env.reset(2);
+    still.reset(2);
+    let mut kicks = Vec::new();
+    for k in 1..=100 {
+        let a = env.step(&[0.0; 6]).info.gait.unwrap();
+        let b = still.step(&[0.0; 6]).info.gait.unwrap();
+        let dv = a.forward_velocity - b.forward_velocity;
+        if kicks.is_empty() && dv.abs() > 0.2 {
+            kicks.push((k, dv));
+        }
+    }
+    let (step, dv) = kicks[0];
+    // The first push comes at 1 s ± ¼ s (steps 30–50 of 25 ms) and moves the torso by
+    // about ±0.5 m/s.
+    assert!((30..=51).contains(&step), "first push at step {step}");
+    assert!((dv.abs() - 0.5).abs() < 0.2, "Δv {dv}");
+}
+
+#[test]
+fn randomised_episodes_draw_friction_mass_and_strength_from_their_ranges() {
+    let cfg = WalkConfig {
+        perturb: Perturb {
+            friction_range: Some([0.4, 1.2]),
+            mass_range: Some([0.8, 1.2]),
+            strength_range: Some([0.8, 1.2]),
+            ..Perturb::default()
+        },
+        ..WalkConfig::default()
+    };
+    let mut env = WalkEnv::new(cfg).unwrap();
+    let nominal: f32 = env.model().links().iter().map(|l| l.mass as f32).sum();
+    let mut masses = Vec::new();
+    for seed in 0..12 {
+        env.reset(seed);
+        masses.push(env.sim().total_mass() / nominal);
+    }
+    assert!(
+        masses.iter().all(|m| (0.8 - 1e-4..=1.2 + 1e-4).contains(m)),
+        "{masses:?}"
+    );
+    let spread = masses.iter().cloned().fold(f32::MIN, f32::max)
+        - masses.iter().cloned().fold(f32::MAX, f32::min);
+    assert!(spread > 0.1, "the mass varies between episodes: {masses:?}");
+    env.reset(3);
+    let again = env.sim().total_mass() / nominal;
+    assert_eq!(again, masses[3], "the same seed draws the same episode");
+}
