@@ -36,8 +36,8 @@ fn momentum(sim: &RobotSim, model: &RobotModel) -> [f64; 3] {
     for (l, link) in model.links().iter().enumerate() {
         let (v, _) = sim.link_velocity(l);
         let m = link.mass;
-        for k in 0..3 {
-            p[k] += m * f64::from(v.to_array()[k]);
+        for (pk, vk) in p.iter_mut().zip(v.to_array()) {
+            *pk += m * f64::from(vk);
         }
     }
     p
