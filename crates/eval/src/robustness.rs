@@ -175,7 +175,8 @@ impl CardRow {
 }
 
 /// Evaluates `loaded` undisturbed and under each of `set`, `episodes` deterministic episodes
-/// from reset seeds `seed, seed + 1, …` each (traces are not kept).
+/// from reset seeds `seed, seed + 1, …` each (traces are not kept). The undisturbed task is
+/// the run's own without its `[walk.perturb]` (training-time randomisation is left out).
 pub fn card(
     loaded: &LoadedRun,
     seed: u64,
@@ -191,7 +192,10 @@ pub fn card(
         if stop.is_some_and(|s| s()) {
             break;
         }
+        // From the undisturbed task: a run trained with randomised disturbances is carded
+        // on the same task as any other.
         let mut walk = loaded.config.walk.clone();
+        walk.perturb = esrl_sim::Perturb::default();
         if let Some(d) = d {
             d.apply(&mut walk);
         }
