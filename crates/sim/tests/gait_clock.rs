@@ -18,7 +18,15 @@ fn stance_windows_and_contact_reward_by_hand() {
         contact_force: 10.0,
         chatter: 0.0,
         min_phase: 0.1,
+        clearance: 0.4,
+        clearance_height: 0.05,
     };
+    // Clearance: a swing foot 2.5 cm up earns half of its share, one at 8 cm all of it, a
+    // foot in stance nothing; φ = 0.3 has the right foot in swing.
+    assert!((c.clearance_reward(0.3, [0.08, 0.025]) - 0.4 * 0.5 / 2.0).abs() < 1e-6);
+    assert!((c.clearance_reward(0.3, [0.0, 0.08]) - 0.4 / 2.0).abs() < 1e-6);
+    assert_eq!(c.clearance_reward(0.3, [0.0, -0.01]), 0.0);
+    assert_eq!(c.clearance_reward(0.05, [0.1, 0.1]), 0.0, "double support: no swing foot");
     // Left down for φ ∈ [0, 0.6); right down for (φ + 0.5) mod 1 ∈ [0, 0.6), i.e. φ ∈
     // [0, 0.1) ∪ [0.5, 1): double support on [0, 0.1) and [0.5, 0.6).
     assert_eq!(c.stance(0.05), [true, true]);
@@ -168,4 +176,37 @@ fn chatter_is_paid_for_each_short_phase_when_it_ends() {
         transitions > 0 && paid > 0,
         "{transitions} transitions, {paid} paid"
     );
+}
+
+#[test]
+fn clearance_is_paid_for_the_swing_foot_height_step_by_step() {
+    let clock = GaitClock {
+        clearance: 0.5,
+        ..GaitClock::default()
+    };
+    let cfg = WalkConfig {
+        gait_clock: Some(clock.clone()),
+        action: esrl_sim::ActionMode::Target,
+        ..WalkConfig::default()
+    };
+    let mut env = WalkEnv::new(cfg).unwrap();
+    env.reset(1);
+    let (mut paid, mut some) = (0, false);
+    for k in 0..60 {
+        // Lift the left leg: hip and knee flexed, so its foot rises off the ground.
+        let a = if k < 30 { [-0.8, 0.8, 0.0, 0.0, 0.0, 0.0] } else { [0.0; 6] };
+        let phase = env.phase();
+        let step = env.step(&a);
+        let term = step.info.reward_terms.iter().find(|t| t.0 == "clearance").unwrap().1;
+        let feet = env.foot_heights();
+        let want = if step.terminated { 0.0 } else { clock.clearance_reward(env.phase(), feet) };
+        assert!((term - want).abs() < 1e-6, "step {k} at φ {phase}: {term} vs {want}");
+        paid += usize::from(term > 0.0);
+        some |= feet[0] > 0.02;
+    }
+    assert!(some && paid > 0, "the lifted foot earned clearance");
+    // Off, there is no such term.
+    let mut plain = WalkEnv::new(WalkConfig::default()).unwrap();
+    plain.reset(1);
+    assert!(plain.step(&[0.0; 6]).info.reward_terms.iter().all(|t| t.0 != "clearance"));
 }

@@ -238,6 +238,25 @@ pub struct GaitClock {
     /// The shortest contact or air phase that is not chatter, s. Default 0.1 (4 control
     /// steps of 25 ms; the default clock's swing lasts 0.4 s).
     pub min_phase: f32,
+    /// Reward per step for swing-foot clearance: each foot in its swing window earns
+    /// `clearance · min(h / clearance_height, 1) / 2`, `h` its link origin's height above
+    /// where it is in the standing pose (0 below), paid as the term `clearance`. Against
+    /// shuffles, whose feet tap and slide instead of stepping. Default 0 (off).
+    #[serde(skip_serializing_if = "is_zero_f32")]
+    pub clearance: f32,
+    /// The swing-foot height that earns the whole clearance reward, m. Default 0.05 (a
+    /// human's foot rises 5–15 cm in mid-swing; Winter, *Biomechanics and Motor Control of
+    /// Human Movement*, 4th ed.).
+    #[serde(skip_serializing_if = "is_default_clearance_height")]
+    pub clearance_height: f32,
+}
+
+fn is_zero_f32(v: &f32) -> bool {
+    *v == 0.0
+}
+
+fn is_default_clearance_height(v: &f32) -> bool {
+    *v == 0.05
 }
 
 impl Default for GaitClock {
@@ -249,6 +268,8 @@ impl Default for GaitClock {
             contact_force: 10.0,
             chatter: 0.0,
             min_phase: 0.1,
+            clearance: 0.0,
+            clearance_height: 0.05,
         }
     }
 }
@@ -264,6 +285,17 @@ impl GaitClock {
     /// `dt`: `min_phase / dt`, rounded.
     pub fn min_phase_steps(&self, dt: f32) -> u32 {
         (self.min_phase / dt).round() as u32
+    }
+
+    /// The clearance reward (see [`GaitClock::clearance`]) for feet whose link origins are
+    /// `height` m above their standing height at phase `phi`.
+    pub fn clearance_reward(&self, phi: f32, height: [f32; 2]) -> f32 {
+        let want = self.stance(phi);
+        let lift: f32 = (0..2)
+            .filter(|&i| !want[i])
+            .map(|i| (height[i] / self.clearance_height).clamp(0.0, 1.0))
+            .sum();
+        self.clearance * lift / 2.0
     }
 
     /// The clock's reward for the feet's normal forces at phase `phi`.
@@ -626,6 +658,8 @@ impl WalkConfig {
             nonneg("gait_clock.contact_force", c.contact_force)?;
             nonneg("gait_clock.chatter", c.chatter)?;
             nonneg("gait_clock.min_phase", c.min_phase)?;
+            nonneg("gait_clock.clearance", c.clearance)?;
+            pos("gait_clock.clearance_height", c.clearance_height)?;
         }
         nonneg("init_noise.joint_angle", self.init_noise.joint_angle)?;
         nonneg("init_noise.joint_velocity", self.init_noise.joint_velocity)?;

@@ -404,6 +404,13 @@ impl WalkEnv {
         self.shared.feet.map(|f| self.sim.ground_normal_force(f))
     }
 
+    /// Each foot link origin's height above where it is in the standing pose (left, right),
+    /// m: what the gait clock's clearance term reads.
+    pub fn foot_heights(&self) -> [f32; 2] {
+        let s = &self.shared;
+        [0, 1].map(|i| self.sim.link_pose(s.feet[i]).translation.z - s.foot_height[i] as f32)
+    }
+
     /// Whether each foot is down now by the gait clock's contact force (no clock: neither).
     fn feet_down(&self, s: &WalkShared) -> [bool; 2] {
         match &s.config.gait_clock {
@@ -650,6 +657,7 @@ impl Env for WalkEnv {
         };
         let feet = reward::Feet {
             force,
+            height: self.foot_heights(),
             phase: self.phase(),
             short_phases,
         };

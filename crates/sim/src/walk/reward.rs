@@ -30,6 +30,8 @@ pub(super) struct Effort<'a> {
 /// ended shorter than the clock's `min_phase` (chatter).
 pub(super) struct Feet {
     pub(super) force: [f32; 2],
+    /// Each foot's link-origin height above its standing height, m.
+    pub(super) height: [f32; 2],
     pub(super) phase: f32,
     pub(super) short_phases: u32,
 }
@@ -138,6 +140,14 @@ pub(super) fn judge(
                 -clock.chatter * feet.short_phases as f32
             };
             terms.push(("chatter", c));
+        }
+        if clock.clearance != 0.0 {
+            let c = if fell || off_course {
+                0.0
+            } else {
+                clock.clearance_reward(feet.phase, feet.height)
+            };
+            terms.push(("clearance", c));
         }
     }
     if w.torque_sq != 0.0 {

@@ -36,6 +36,8 @@ pub(super) struct WalkShared {
     pub(super) standing_q: Vec<f64>,
     /// Torso origin height in the standing pose with the feet on the ground, m.
     pub(super) standing_height: f64,
+    /// Each foot link origin's height in that pose, m.
+    pub(super) foot_height: [f64; 2],
     /// Total mass × gravity, N.
     pub(super) weight: f32,
     pub(super) setup: SimSetup,
@@ -73,6 +75,11 @@ impl WalkShared {
             .collect();
         let feet = foot_links(&model, &config)?;
         let (standing_q, standing_height) = standing(&model, &config)?;
+        let stand_poses = model.forward_kinematics(
+            &Iso::from_translation([0.0, 0.0, standing_height]),
+            &standing_q,
+        );
+        let foot_height = feet.map(|f| stand_poses[f].t[2]);
         let setup = sim_setup(&model, &config, &actuated);
         let max_steps = (config.episode_seconds / config.control_period)
             .round()
@@ -110,6 +117,7 @@ impl WalkShared {
             range,
             standing_q,
             standing_height,
+            foot_height,
             weight,
             setup,
             max_steps,
