@@ -25,6 +25,9 @@ venv_python="$root/.venv/bin/python"
 # Ray is optional for users (`pip install "./py[ray]"`) but tested here: `python -m esrl_rs.ray`
 # against `esrl train` on a local cluster (py/tests/test_ray.py).
 "$venv_python" -m pip install --quiet --disable-pip-version-check "ray>=2.9"
+# MuJoCo is the second engine of `python -m esrl_rs.sim2sim`; its tests are skipped without it.
+"$venv_python" -m pip install --quiet --disable-pip-version-check "mujoco>=3.2" \
+    || echo "test_py.sh: mujoco not installed; the sim-to-sim check is not tested" >&2
 # moviepy lets Gymnasium's RecordVideo write the walk's frames (render_mode="rgb_array");
 # its test is skipped without it.
 "$venv_python" -m pip install --quiet --disable-pip-version-check moviepy \

@@ -280,6 +280,60 @@ impl EnvCore {
         )
     }
 
+    /// The factor every observation index is multiplied by (`WalkConfig::normalize_obs`);
+    /// all 1 for the pendulum.
+    #[getter]
+    fn obs_scale(&self, py: Python<'_>) -> PyResult<Vec<f32>> {
+        py.detach(|| {
+            let task = self.lock()?;
+            Ok(match &task.sim {
+                Sim::Walk(w) => w.obs_scale().to_vec(),
+                Sim::Pendulum(_) => vec![1.0; self.obs_dim],
+            })
+        })
+        .map_err(|f| self.failure("obs_scale", f))
+    }
+
+    /// The walking robot's state now, for rebuilding it in another engine: `base_position`
+    /// (the torso link origin, m) and `base_quat` (`[x, y, z, w]`), `base_velocity` and
+    /// `base_angular_velocity` (of the torso origin, world frame), `joint_names`, `q`, `qd`
+    /// (every movable joint, URDF order), `phase` (the gait clock's), `standing_height` (the
+    /// torso origin's, m), `foot_heights` (each foot origin's standing height, m) and
+    /// `weight` (N). `ValueError` for the pendulum.
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let state = py
+            .detach(|| {
+                let task = self.lock()?;
+                let Sim::Walk(w) = &task.sim else {
+                    return Ok(None);
+                };
+                let sim = w.sim();
+                let model = w.model();
+                let torso = model.root();
+                let pose = sim.link_pose(torso);
+                let movable: Vec<usize> = (0..model.joints().len())
+                    .filter(|&j| model.joints()[j].is_movable())
+                    .collect();
+                Ok(Some(serde_json::json!({
+                    "base_position": pose.translation.to_array(),
+                    "base_quat": [pose.rotation.x, pose.rotation.y, pose.rotation.z, pose.rotation.w],
+                    "base_velocity": sim.link_origin_velocity(torso).to_array(),
+                    "base_angular_velocity": sim.link_angular_velocity(torso).to_array(),
+                    "joint_names": movable.iter().map(|&j| model.joints()[j].name.clone()).collect::<Vec<_>>(),
+                    "q": movable.iter().map(|&j| sim.joint_position(j)).collect::<Vec<_>>(),
+                    "qd": movable.iter().map(|&j| sim.joint_velocity(j)).collect::<Vec<_>>(),
+                    "phase": w.phase(),
+                    "standing_height": w.standing_height(),
+                    "foot_heights": w.standing_foot_heights(),
+                    "weight": w.body_weight(),
+                })))
+            })
+            .map_err(|f| self.failure("state", f))?
+            .ok_or_else(|| value_error("the pendulum has no robot state (state is for the walk)"))?;
+        let dict = json_to_py(py, &state, false)?;
+        Ok(dict.cast_into::<PyDict>()?)
+    }
+
     /// The walking robot seen from the side now: an RGB image `(height, width, 3)` of uint8,
     /// `metres` of the world high, the camera following the torso
     /// (`esrl_eval::render_rgb`). The pendulum has no picture (`ValueError`).

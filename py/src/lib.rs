@@ -36,6 +36,7 @@ fn native(module: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = module.py();
     module.add("EsrlError", py.get_type::<errors::EsrlError>())?;
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    module.add("HUMANOID_URDF", esrl_sim::HUMANOID_URDF)?;
     run::register(module)?;
     recording::register(module)?;
     envs::register(module)?;

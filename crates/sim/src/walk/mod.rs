@@ -404,6 +404,11 @@ impl WalkEnv {
         self.shared.feet.map(|f| self.sim.ground_normal_force(f))
     }
 
+    /// Each foot link origin's height in the standing pose (left, right), m.
+    pub fn standing_foot_heights(&self) -> [f32; 2] {
+        self.shared.foot_height.map(|h| h as f32)
+    }
+
     /// Each foot link origin's height above where it is in the standing pose (left, right),
     /// m: what the gait clock's clearance term reads.
     pub fn foot_heights(&self) -> [f32; 2] {

@@ -1,0 +1,388 @@
+"""Sim-to-sim: the walking task rebuilt on MuJoCo from the same URDF, to run an esrl policy
+in a second, independent physics engine before trusting its walk.
+
+    pip install "./py[mujoco]"          # or: pip install mujoco
+    python -m esrl_rs.sim2sim results/walking/flagship --episodes 10
+
+:class:`MujocoWalk` is the task of a run's ``[walk]`` settings on MuJoCo: the same URDF (the
+embedded humanoid or the run's ``urdf``) with its root on a free joint and a ground plane,
+the same observation (every entry computed from MuJoCo's state as ``esrl-sim`` computes it
+from Rapier's, with the same fixed scaling and gait clock), the same action mapping
+(joint-angle targets within ``target.range`` of the standing pose, or torques), the same
+servo law (``τ = clamp(kp·(q* − q) − kd·q̇, ±effort)`` at every physics step), control period
+and physics step, armature on the actuated joints, the same initial states (the Rust
+environment is reset with the same seed and its state copied: joint angles and velocities,
+the torso's pose, the clock's phase) and the same fall and finish rules. :func:`cross_check`
+runs a policy in both engines from the same starts and reports the gait metrics of
+``esrl_rs.metrics`` side by side.
+
+**What matches and what cannot.** Masses, inertias, joint axes and limits, damping and
+friction come from the URDF in both; gravity, friction coefficient (1; MuJoCo takes the
+larger of two geoms' coefficients, Rapier their mean, equal here), time step and substeps are
+set alike. The contact models differ (Rapier: rigid contacts solved by impulses with one
+solver iteration per step; MuJoCo: soft contacts with its default solver reference and
+impedance), as do the joint-limit models (Rapier: a hard limit, with torques into it faded
+over the last 2° under ``fade``; MuJoCo: a soft limit constraint) and the servo (Rapier
+integrates it implicitly inside its solver; here it is an explicit torque per physics step,
+stable at these gains: ω = √(kp/I) ≈ 55 rad/s, ω·h ≈ 0.34). A policy that walks in both has
+learned a gait, not a solver artifact; one that walks in one only depends on what differs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+import xml.etree.ElementTree as ET
+from typing import Any, Dict, List, Mapping, Optional, Sequence
+
+import numpy as np
+
+from . import _native, metrics
+
+__all__ = ["MujocoWalk", "cross_check", "main"]
+
+
+def _floating_urdf(text: str) -> str:
+    """The URDF with its root link on a free joint (MuJoCo welds a URDF's root to the world
+    otherwise), as a file path."""
+    root = ET.fromstring(text)
+    children = {j.find("child").get("link") for j in root.findall("joint")}
+    roots = [l.get("name") for l in root.findall("link") if l.get("name") not in children]
+    if len(roots) != 1:
+        raise ValueError(f"expected one root link, found {roots}")
+    ET.SubElement(root, "link", name="mj_world")
+    joint = ET.SubElement(root, "joint", name="mj_float", type="floating")
+    ET.SubElement(joint, "parent", link="mj_world")
+    ET.SubElement(joint, "child", link=roots[0])
+    path = os.path.join(tempfile.mkdtemp(prefix="esrl-sim2sim-"), "floating.urdf")
+    ET.ElementTree(root).write(path)
+    return path
+
+
+def _quat_to_mat(q_xyzw: Sequence[float]) -> np.ndarray:
+    x, y, z, w = q_xyzw
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+class MujocoWalk:
+    """The walking task of ``walk_config`` (a run's ``[walk]`` as a dict) on MuJoCo (module
+    docs). ``reset(seed)`` starts from the state the Rust environment resets to with that
+    seed; ``step(action)`` returns ``(obs, terminated, truncated, sample)``, ``sample`` one
+    step of the gait trace."""
+
+    def __init__(self, walk_config: Mapping[str, Any]) -> None:
+        import mujoco
+
+        self.mujoco = mujoco
+        self.rust = _native.EnvCore.walk(dict(walk_config))
+        self.cfg: Dict[str, Any] = self.rust.config
+        if self.cfg.get("perturb"):
+            raise ValueError("sim2sim rebuilds the undisturbed task; drop [walk.perturb]")
+        urdf = self.cfg.get("urdf")
+        if urdf:
+            with open(urdf, encoding="utf-8") as f:
+                text = f.read()
+        else:
+            text = _native.HUMANOID_URDF
+        spec = mujoco.MjSpec.from_file(_floating_urdf(text))
+        physics = self.cfg["physics"]
+        self.substeps = int(physics["substeps"])
+        self.ts = float(self.cfg["control_period"])
+        self.h = self.ts / self.substeps
+        spec.option.timestep = self.h
+        spec.option.gravity = [0.0, 0.0, -float(physics["gravity"])]
+        spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+        plane = spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_PLANE, size=[200, 200, 0.1])
+        plane.friction = [float(physics["friction"]), 0.005, 0.0001]
+        plane.contype, plane.conaffinity = 0, 1
+        m = spec.compile()
+        # Robot geoms touch the ground only (esrl's self_collisions = false).
+        for g in range(m.ngeom):
+            if m.geom_type[g] != mujoco.mjtGeom.mjGEOM_PLANE:
+                m.geom_contype[g], m.geom_conaffinity[g] = 1, 0
+                m.geom_friction[g][0] = float(physics["friction"])
+        self.m, self.d = m, mujoco.MjData(m)
+        self.torso = m.body(self._root_name(text)).id
+        names = self.rust.action_names
+        self.act_joints = [m.joint(n).id for n in names]
+        self.act_q = [int(m.jnt_qposadr[j]) for j in self.act_joints]
+        self.act_v = [int(m.jnt_dofadr[j]) for j in self.act_joints]
+        armature = float(physics["actuator_armature"])
+        for v in self.act_v:
+            m.dof_armature[v] = armature
+        state0 = self.rust.state()
+        movable = state0["joint_names"]
+        passive = [n for n in movable if n not in names]
+        self.pas_q = [int(m.jnt_qposadr[m.joint(n).id]) for n in passive]
+        self.pas_v = [int(m.jnt_dofadr[m.joint(n).id]) for n in passive]
+        self.all_q = [int(m.jnt_qposadr[m.joint(n).id]) for n in movable]
+        self.all_v = [int(m.jnt_dofadr[m.joint(n).id]) for n in movable]
+        self.feet = [m.body(n).id for n in self.cfg["foot_links"]]
+        self.effort = np.asarray(self.rust.effort_limits, dtype=np.float64)
+        self.scale = np.asarray(self.rust.obs_scale, dtype=np.float64)
+        self.standing_height = float(state0["standing_height"])
+        self.weight = float(state0["weight"])
+        stand = self.cfg["standing_pose"]
+        ranges = [m.jnt_range[j] if m.jnt_limited[j] else (-np.inf, np.inf)
+                  for j in self.act_joints]
+        self.lo = np.array([r[0] for r in ranges])
+        self.hi = np.array([r[1] for r in ranges])
+        self.q_stand = np.clip([float(stand.get(n, 0.0)) for n in names], self.lo, self.hi)
+        self.clock = self.cfg.get("gait_clock")
+        self.max_steps = int(round(float(self.cfg["episode_seconds"]) / self.ts))
+        self.track = float(self.cfg["track_length"])
+        self.fall = self.cfg["fall"]
+        self.target = self.cfg["target"]
+        self.mode = self.cfg["action"]
+
+    @staticmethod
+    def _root_name(text: str) -> str:
+        root = ET.fromstring(text)
+        children = {j.find("child").get("link") for j in root.findall("joint")}
+        return [l.get("name") for l in root.findall("link") if l.get("name") not in children][0]
+
+    # --- state and observation ------------------------------------------------------
+    def _torso(self):
+        """World pose (position, 3×3 rotation) and world linear and angular velocity of the
+        torso link origin."""
+        mj, m, d = self.mujoco, self.m, self.d
+        pos = d.xpos[self.torso].copy()
+        rot = d.xmat[self.torso].reshape(3, 3).copy()
+        vel = np.zeros(6)
+        mj.mj_objectVelocity(m, d, mj.mjtObj.mjOBJ_BODY, self.torso, vel, 0)
+        return pos, rot, vel[3:].copy(), vel[:3].copy()
+
+    def foot_forces(self) -> np.ndarray:
+        """The ground's normal force on each foot, N."""
+        mj, m, d = self.mujoco, self.m, self.d
+        out = np.zeros(2)
+        f = np.zeros(6)
+        for i in range(d.ncon):
+            c = d.contact[i]
+            bodies = (m.geom_bodyid[c.geom1], m.geom_bodyid[c.geom2])
+            for k, foot in enumerate(self.feet):
+                if foot in bodies:
+                    mj.mj_contactForce(m, d, i, f)
+                    out[k] += abs(f[0])
+        return out
+
+    def phase(self) -> float:
+        if not self.clock:
+            return 0.0
+        return (self.phase0 + self.steps * self.ts / float(self.clock["period"])) % 1.0
+
+    def observation(self) -> np.ndarray:
+        d = self.d
+        pos, rot, v, w = self._torso()
+        quat_wxyz = d.xquat[self.torso]
+        quat = [quat_wxyz[1], quat_wxyz[2], quat_wxyz[3], quat_wxyz[0]]
+        inv = rot.T
+        obs: List[float] = [pos[2] - self.standing_height, pos[1], *quat]
+        obs += list(inv @ v) + list(inv @ w) + list(inv @ self.acceleration)
+        obs += [d.qpos[a] for a in self.act_q] + [d.qvel[a] for a in self.act_v]
+        obs += [d.qpos[a] for a in self.pas_q] + [d.qvel[a] for a in self.pas_v]
+        obs += list(self.foot_forces() / self.weight)
+        obs += list(self.prev_action)
+        if self.clock:
+            a = 2 * math.pi * self.phase()
+            obs += [math.sin(a), math.cos(a)]
+        return (np.asarray(obs) * self.scale).astype(np.float32)
+
+    # --- reset and step -------------------------------------------------------------
+    def reset(self, seed: int) -> np.ndarray:
+        """The Rust environment's initial state for ``seed``, copied into MuJoCo; returns the
+        first observation."""
+        mj = self.mujoco
+        self.rust.reset(int(seed))
+        s = self.rust.state()
+        mj.mj_resetData(self.m, self.d)
+        d = self.d
+        x, y, z, w = s["base_quat"]
+        d.qpos[0:3] = s["base_position"]
+        d.qpos[3:7] = [w, x, y, z]
+        d.qvel[0:3] = s["base_velocity"]
+        d.qvel[3:6] = _quat_to_mat(s["base_quat"]).T @ np.asarray(s["base_angular_velocity"])
+        for a, q in zip(self.all_q, s["q"]):
+            d.qpos[a] = q
+        for a, qd in zip(self.all_v, s["qd"]):
+            d.qvel[a] = qd
+        mj.mj_forward(self.m, d)
+        self.phase0 = float(s["phase"])
+        self.steps = 0
+        self.prev_action = np.zeros(len(self.act_q))
+        self.acceleration = np.zeros(3)
+        self.prev_velocity = self._torso()[2]
+        return self.observation()
+
+    def _targets(self, action: np.ndarray) -> np.ndarray:
+        rng = self.target.get("range")
+        if rng is not None:
+            return np.clip(self.q_stand + action * float(rng), self.lo, self.hi)
+        return np.where(action >= 0, self.q_stand + action * (self.hi - self.q_stand),
+                        self.q_stand + action * (self.q_stand - self.lo))
+
+    def step(self, action: Sequence[float]):
+        mj, m, d = self.mujoco, self.m, self.d
+        a = np.nan_to_num(np.asarray(action, dtype=np.float64), nan=0.0).clip(-1.0, 1.0)
+        self.prev_action = a
+        torque = np.zeros(len(a))
+        power = np.zeros(len(a))
+        targets = self._targets(a) if self.mode == "target" else None
+        kp, kd = float(self.target["stiffness"]), float(self.target["damping"])
+        for _ in range(self.substeps):
+            q = np.array([d.qpos[i] for i in self.act_q])
+            qd = np.array([d.qvel[i] for i in self.act_v])
+            if targets is not None:
+                tau = np.clip(kp * (targets - q) - kd * qd, -self.effort, self.effort)
+            else:
+                tau = a * self.effort
+            d.qfrc_applied[:] = 0.0
+            for v, t in zip(self.act_v, tau):
+                d.qfrc_applied[v] = t
+            mj.mj_step(m, d)
+            q1 = np.array([d.qpos[i] for i in self.act_q])
+            torque += tau / self.substeps
+            power += np.abs(tau * (q1 - q) / self.h) / self.substeps
+        self.steps += 1
+        pos, rot, v, _ = self._torso()
+        self.acceleration = (v - self.prev_velocity) / self.ts
+        self.prev_velocity = v
+        obs = self.observation()
+        tilt = math.acos(max(-1.0, min(1.0, rot[2, 2])))
+        fell = (pos[2] - self.standing_height < -float(self.fall["max_height_drop"])
+                or tilt > float(self.fall["max_tilt"]) or not np.isfinite(obs).all())
+        success = not fell and pos[0] >= self.track
+        end = bool(self.cfg["end_at_finish"])
+        terminated = fell or (success and end)
+        truncated = not terminated and self.steps >= self.max_steps
+        sample = {
+            "time": self.steps * self.ts, "torso_x": pos[0], "torso_y": pos[1],
+            "torso_z_error": pos[2] - self.standing_height, "forward_velocity": v[0],
+            "torques": torque, "powers": power, "foot_forces": self.foot_forces(),
+            "joint_angles": np.array([d.qpos[i] for i in self.act_q]),
+            "foot_positions": [list(d.xpos[f][:2]) for f in self.feet],
+            "fell": fell, "success": success,
+        }
+        return obs, terminated, truncated, sample
+
+    def episode(self, policy: Any, seed: int) -> Dict[str, Any]:
+        """One deterministic episode of ``policy`` (an ``esrl_rs.Policy``) from ``seed``:
+        the gait trace, ready for :func:`esrl_rs.metrics.gait_metrics`."""
+        obs = self.reset(seed)
+        policy.reset()
+        names = list(self.rust.action_names)
+        tr: Dict[str, Any] = {k: [] for k in ("time", "torso_x", "torso_y", "torso_z_error",
+                                             "forward_velocity", "torques", "powers",
+                                             "foot_forces", "joint_angles", "foot_positions")}
+        fell, success_time = False, None
+        while True:
+            obs, terminated, truncated, s = self.step(policy.act(obs))
+            for k in tr:
+                tr[k].append(np.asarray(s[k], dtype=np.float64).tolist())
+            fell = fell or s["fell"]
+            if s["success"] and success_time is None:
+                success_time = s["time"]
+            if terminated or truncated:
+                break
+        limits = [[float(lo), float(hi)] if np.isfinite(lo) else None
+                  for lo, hi in zip(self.lo, self.hi)]
+        return {**tr, "actuator_names": names, "foot_names": list(self.cfg["foot_links"]),
+                "fell": fell, "success_time": success_time, "joint_limits": limits}
+
+
+def _summary(gaits: List[Dict[str, Any]]) -> Dict[str, Any]:
+    classes: Dict[str, int] = {}
+    for g in gaits:
+        c = (g.get("cycle") or {}).get("gait_class", "fall")
+        classes[c] = classes.get(c, 0) + 1
+    times = [g["track_time"] for g in gaits if g.get("track_time") is not None]
+    return {
+        "episodes": len(gaits),
+        "finished": len(times),
+        "falls": sum(bool(g["fell"]) for g in gaits),
+        "classes": dict(sorted(classes.items(), key=lambda kv: -kv[1])),
+        "track_time": float(np.mean(times)) if times else None,
+        "speed": float(np.mean([g["mean_forward_velocity"] for g in gaits])),
+        "sway": float(np.mean([g["mean_abs_lateral"] for g in gaits])),
+        "knee_asymmetry": float(np.mean([g["knee_torque_asymmetry"] for g in gaits])),
+    }
+
+
+def cross_check(path: str, episodes: int = 10, seed: int = 0) -> Dict[str, Any]:
+    """The policy in ``path`` (a run, checkpoint, ``best/`` or record ``policy/`` folder)
+    from reset seeds ``seed … seed + episodes − 1`` in esrl (``Policy.evaluate``, the code
+    of ``esrl eval``) and on MuJoCo (:class:`MujocoWalk`): both engines' gait metrics
+    (:func:`esrl_rs.metrics.gait_metrics`), summarised per engine and per episode."""
+    from .policy import load_policy
+
+    policy = load_policy(path)
+    if policy.env != "walk":
+        raise ValueError(f"{path}: a {policy.env} run; sim2sim is for the walking task")
+    walk = policy._core.walk_config
+    esrl = policy.evaluate(episodes, seed)
+    env = MujocoWalk(walk)
+    track = float(env.track)
+    mj = [metrics.gait_metrics(env.episode(policy, seed + k), track_length=track)
+          for k in range(episodes)]
+    ours = [e["gait"] for e in esrl["episodes"] if e["gait"] is not None]
+    return {"policy": os.fspath(path), "seed": seed, "episodes": episodes,
+            "esrl": _summary(ours), "mujoco": _summary(mj),
+            "per_episode": [{"seed": seed + k, "esrl": (ours[k].get("cycle") or {}).get(
+                "gait_class"), "mujoco": (mj[k].get("cycle") or {}).get("gait_class"),
+                "esrl_finished": ours[k].get("track_time") is not None,
+                "mujoco_finished": mj[k].get("track_time") is not None,
+                "mujoco_distance": mj[k]["distance"]} for k in range(episodes)]}
+
+
+def _table(r: Dict[str, Any]) -> str:
+    def row(name: str, s: Dict[str, Any]) -> str:
+        classes = ", ".join(f"{c} {n}" for c, n in s["classes"].items())
+        tt = f"{s['track_time']:.1f}" if s["track_time"] is not None else "–"
+        return (f"| {name} | {classes} | {s['finished']}/{s['episodes']} | {s['falls']} | "
+                f"{tt} | {s['speed']:.2f} | {s['sway']:.3f} | {100 * s['knee_asymmetry']:.1f} % |")
+
+    return "\n".join([
+        "| engine | gait classes | finished 50 m | falls | track time (s) | speed (m/s) | "
+        "sway (m) | knee asym. |",
+        "|---|---|---:|---:|---:|---:|---:|---:|",
+        row("esrl (Rapier)", r["esrl"]), row("MuJoCo", r["mujoco"])]) + "\n"
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    ap = argparse.ArgumentParser(prog="python -m esrl_rs.sim2sim",
+                                 description="Run an esrl walking policy in esrl and on MuJoCo "
+                                 "from the same starts and compare the gait metrics.")
+    ap.add_argument("policy", help="a run folder, a checkpoint or best/ folder, or a record's "
+                    "policy/ folder")
+    ap.add_argument("--episodes", type=int, default=10)
+    ap.add_argument("--seed", type=int, default=0, help="reset seed of the first episode")
+    ap.add_argument("--json", action="store_true", help="print the result as JSON")
+    a = ap.parse_args(argv)
+    try:
+        import mujoco  # noqa: F401
+    except ImportError:
+        print('error: MuJoCo is not installed: pip install "esrl_rs[mujoco]" (or pip install '
+              "mujoco)", file=sys.stderr)
+        return 1
+    if a.episodes < 1:
+        print("error: --episodes must be at least 1", file=sys.stderr)
+        return 2
+    try:
+        r = cross_check(a.policy, a.episodes, a.seed)
+    except (ValueError, OSError, _native.EsrlError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    print(json.dumps(r, indent=1) if a.json else _table(r), end="")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,74 @@
+"""Sim-to-sim: the walking task rebuilt on MuJoCo (esrl_rs.sim2sim) against esrl's own.
+
+A zero action stands 10 s in both engines; from the same initial state the observations are
+the same (but the foot forces: contact models differ), so is the actor's action to within
+what those forces move it, and after one control step the pose agrees to millimetres; the
+cross-check runs a committed policy in both. MuJoCo is optional: without it these tests skip
+(CI installs it).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("mujoco", reason="MuJoCo is optional: pip install 'esrl_rs[mujoco]'")
+
+import esrl_rs  # noqa: E402
+from esrl_rs.sim2sim import MujocoWalk, cross_check, main  # noqa: E402
+
+FLAGSHIP = Path(__file__).resolve().parents[2] / "results" / "walking" / "flagship"
+
+
+@pytest.fixture(scope="module")
+def engines():
+    policy = esrl_rs.load_policy(FLAGSHIP)
+    walk = policy._core.walk_config
+    return policy, esrl_rs.WalkEnv(walk), MujocoWalk(walk)
+
+
+def test_zero_action_stands_ten_seconds_in_both_engines(engines) -> None:
+    _, rust, mj = engines
+    for seed in (0, 1):
+        rust.reset(seed=seed)
+        mj.reset(seed)
+        for _ in range(400):
+            _, _, fell, _, info = rust.step(np.zeros(6, dtype=np.float32))
+            _, mj_fell, _, s = mj.step(np.zeros(6))
+            assert not fell and not mj_fell
+        assert abs(info["gait"]["height_error"]) < 0.01 and abs(s["torso_z_error"]) < 0.01
+
+
+def test_the_same_start_observes_and_acts_alike(engines) -> None:
+    policy, rust, mj = engines
+    names = rust.obs_names
+    force = np.array([n.startswith("foot_force") for n in names])
+    for seed in range(4):
+        o_rust, _ = rust.reset(seed=seed)
+        o_mj = mj.reset(seed)
+        np.testing.assert_allclose(o_mj[~force], o_rust[~force], atol=1e-5)
+        policy.reset()
+        a_rust = policy.act(o_rust)
+        policy.reset()
+        a_mj = policy.act(o_mj)
+        assert np.abs(a_rust - a_mj).max() < 0.1, f"seed {seed}"
+        o_rust, *_ = rust.step(np.zeros(6, dtype=np.float32))
+        o_mj, *_ = mj.step(np.zeros(6))
+        pose = np.array([n.split("/")[0] in ("height_error", "lateral_offset", "orientation",
+                                             "joint_angle", "passive_angle", "clock")
+                         for n in names])
+        # After 25 ms: the torso within a millimetre (height and lateral offset are scaled
+        # ×10), the joints within 0.3°.
+        np.testing.assert_allclose(o_mj[pose], o_rust[pose], atol=1e-2)
+
+
+def test_the_cross_check_runs_a_policy_in_both(capsys) -> None:
+    r = cross_check(str(FLAGSHIP), episodes=2, seed=0)
+    for engine in ("esrl", "mujoco"):
+        assert r[engine]["episodes"] == 2
+        assert sum(r[engine]["classes"].values()) == 2
+    assert r["esrl"]["finished"] == 2, "the flagship finishes in esrl"
+    assert main([str(FLAGSHIP), "--episodes", "1"]) == 0
+    assert "| MuJoCo |" in capsys.readouterr().out
