@@ -232,3 +232,32 @@ def test_report_refuses_to_pool_different_configurations(tmp_path: Path) -> None
     assert proc.returncode == 0, proc.stderr
     assert "pools runs of different configurations" in proc.stdout
     assert "td3-s1 is unfinished" in proc.stdout
+
+
+def test_study_and_robustness_figures(tmp_path) -> None:
+    """The study figures from a report.json and the robustness figure from a card."""
+    pytest.importorskip("matplotlib")
+    from esrl_rs.study import performance_profile, robustness_figure, study_figures
+
+    np.testing.assert_array_equal(performance_profile([1.0, 2.0, 3.0], np.array([0.0, 1.5, 3.0])),
+                                  [1.0, 2 / 3, 0.0])
+    study = tmp_path / "study"
+    study.mkdir()
+    interval = {"estimate": 0.5, "lo": 0.2, "hi": 0.8}
+    (study / "report.json").write_text(json.dumps({
+        "arms": [{"arm": "a", "runs": 2, "at_bar": 1, "rate": interval,
+                  "best_win_50_iqm": {"estimate": 10.0, "lo": 5.0, "hi": 12.0}}],
+        "runs": [{"arm": "a", "best_win_50": 8.0}, {"arm": "a", "best_win_50": 12.0}],
+    }))
+    files = study_figures(study, tmp_path / "out", dpi=40)
+    assert [f.name for f in files] == ["study_intervals.png", "study_profiles.png"]
+    card = tmp_path / "eval.json"
+    row = {"episodes": 4, "survived": 2, "finished": 1, "speed": 1.0, "classes": {}}
+    (card).write_text(json.dumps({"run": "r", "robustness": [
+        {**row, "disturbance": None},
+        {**row, "disturbance": {"kind": "friction", "value": 0.4}},
+        {**row, "disturbance": {"kind": "delay", "value": 1}}]}))
+    assert robustness_figure(card, tmp_path / "out", dpi=40).is_file()
+    (tmp_path / "plain.json").write_text(json.dumps({"run": "r"}))
+    with pytest.raises(ValueError, match="no robustness card"):
+        robustness_figure(tmp_path / "plain.json", tmp_path / "out")

@@ -31,7 +31,8 @@
 //!                           config.toml, metrics.csv, summary.json, checks.jsonl, eval.json
 //!                           (its handed-over policy from the study's starts) and policy/
 //!                           (actor.safetensors, config.toml, best.json: `esrl eval` takes it)
-//!   report.md, report.csv   `esrl study report DIR`
+//!   report.md, .csv, .json  `esrl study report DIR` (the figures: `python -m
+//!                           esrl_rs.report --study DIR`)
 //! ```
 //!
 //! `esrl study run` trains every run that is not finished (resuming interrupted ones from
@@ -888,22 +889,21 @@ fn report(dir: &Path, json_out: bool) -> Result<()> {
          steps to the first policy the walking check found at the bar during training \
          (`checks.jsonl`); wall: training time as measured on the machine that ran it.\n",
     );
+    let figures = json!({"arms": arms_json, "improvement": poi_json, "runs": rows});
     write_atomic(&dir.join("report.md"), md.as_bytes())?;
     write_atomic(&dir.join("report.csv"), csv.as_bytes())?;
+    write_json_atomic(&dir.join("report.json"), &figures)?;
     if json_out {
-        println!(
-            "{}",
-            serde_json::to_string_pretty(
-                &json!({"arms": arms_json, "improvement": poi_json, "runs": rows})
-            )?
-        );
+        println!("{}", serde_json::to_string_pretty(&figures)?);
     } else {
         print!("{md}");
     }
     eprintln!(
-        "wrote {} and {}",
+        "wrote {}, {} and {} (`python -m esrl_rs.report --study {}` draws them)",
         dir.join("report.md").display(),
-        dir.join("report.csv").display()
+        dir.join("report.csv").display(),
+        dir.join("report.json").display(),
+        dir.display()
     );
     Ok(())
 }

@@ -536,6 +536,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                     "(gait diagram, joint angles, side-view filmstrip) from esrl run "
                     "folders, grouped by agent.")
     parser.add_argument("runs", nargs="*", metavar="RUN_DIR", help="run folders")
+    parser.add_argument("--study", metavar="DIR",
+                        help="a study folder (after `esrl study report DIR`): the arms' "
+                             "intervals and performance profiles")
+    parser.add_argument("--robustness", metavar="EVAL_JSON",
+                        help="an eval.json with a robustness card (`esrl eval POLICY "
+                             "--robustness`): survival against each disturbance")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder")
     parser.add_argument("--dpi", type=int, default=150, help="PNG resolution (default 150)")
     parser.add_argument("--gait", action="append", default=[], metavar="PATH",
@@ -555,9 +561,21 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="pool runs of one agent even when their configurations differ "
                              "(by default that is refused, listing the differences)")
     args = parser.parse_args(argv)
-    if not args.runs and not args.gait:
-        parser.error("give run folders or --gait PATH")
+    if not args.runs and not args.gait and not args.study and not args.robustness:
+        parser.error("give run folders, --gait PATH, --study DIR or --robustness EVAL_JSON")
     try:
+        if args.study or args.robustness:
+            from .study import robustness_figure, study_figures
+
+            written = []
+            if args.study:
+                written += study_figures(args.study, args.out, dpi=args.dpi)
+            if args.robustness:
+                written.append(robustness_figure(args.robustness, args.out, dpi=args.dpi))
+            for path in written:
+                print(f"wrote {path}")
+            if not args.runs and not args.gait:
+                return 0
         if args.runs:
             report = render_report(args.runs, args.out, dpi=args.dpi, episode=args.episode,
                                    gif=args.gif, start=args.start, mixed=args.mixed,

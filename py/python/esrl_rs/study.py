@@ -1,0 +1,144 @@
+"""Figures of a study folder and of a robustness card.
+
+- :func:`study_figures`: from ``DIR/report.json`` (``esrl study report DIR``), per arm the
+  rate at the walking bar with its Wilson 95 % interval and the IQM of Best-Win-50 with its
+  bootstrap 95 % interval (``study_intervals.png``), and the performance profiles of
+  Best-Win-50: for every score τ, the share of an arm's runs that score above it
+  (``study_profiles.png``; Agarwal et al. 2021, "Deep RL at the Edge of the Statistical
+  Precipice", Fig. 3, whose ``rliable`` draws the same curve with bootstrap bands).
+- :func:`robustness_figure`: from an ``eval.json`` with a ``robustness`` card (``esrl eval
+  POLICY --robustness``), the share of episodes that stayed up against each disturbance's
+  magnitude (``robustness.png``).
+
+``python -m esrl_rs.report --study DIR --out OUT`` and ``--robustness EVAL.json --out OUT``
+draw them (needs matplotlib).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any, Dict, List, Union
+
+import numpy as np
+
+__all__ = ["performance_profile", "robustness_figure", "study_figures"]
+
+PathLike = Union[str, Path]
+
+
+def performance_profile(scores: List[float], taus: np.ndarray) -> np.ndarray:
+    """The share of ``scores`` strictly above each τ of ``taus`` (a performance profile)."""
+    s = np.asarray(scores, dtype=float)
+    return np.array([(s > t).mean() if s.size else np.nan for t in taus])
+
+
+def _plt() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Path]:
+    """The figures of a study folder (module docs) into ``out``; returns their paths."""
+    report = json.loads((Path(study_dir) / "report.json").read_text(encoding="utf-8"))
+    arms = report["arms"]
+    runs = report["runs"]
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    plt = _plt()
+    files = []
+
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 0.6 * len(arms) + 1.8))
+    y = np.arange(len(arms))
+    for i, a in enumerate(arms):
+        r = a["rate"]
+        ax1.errorbar(100 * r["estimate"], i, xerr=[[100 * (r["estimate"] - r["lo"])],
+                                                   [100 * (r["hi"] - r["estimate"])]],
+                     fmt="o", capsize=4, color=f"C{i}")
+        b = a["best_win_50_iqm"]
+        ax2.errorbar(b["estimate"], i, xerr=[[b["estimate"] - b["lo"]], [b["hi"] - b["estimate"]]],
+                     fmt="o", capsize=4, color=f"C{i}")
+    for ax in (ax1, ax2):
+        ax.set_yticks(y, [f"{a['arm']} ({a['at_bar']}/{a['runs']})" for a in arms])
+        ax.invert_yaxis()
+        ax.grid(axis="x", alpha=0.3)
+    ax1.set_xlim(-2, 102)
+    ax1.set_xlabel("runs at the walking bar (%), Wilson 95 % interval")
+    ax2.set_xlabel("IQM of Best-Win-50, bootstrap 95 % interval")
+    fig.tight_layout()
+    path = out / "study_intervals.png"
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    files.append(path)
+
+    fig, ax = plt.subplots(figsize=(5.5, 3.6))
+    all_scores = [r["best_win_50"] for r in runs]
+    taus = np.linspace(min(all_scores) - 1, max(all_scores) + 1, 200)
+    for i, a in enumerate(arms):
+        scores = [r["best_win_50"] for r in runs if r["arm"] == a["arm"]]
+        ax.step(taus, performance_profile(scores, taus), where="post", color=f"C{i}",
+                label=f"{a['arm']} ({len(scores)} runs)")
+    ax.set_xlabel("Best-Win-50 τ")
+    ax.set_ylabel("share of runs with score > τ")
+    ax.set_ylim(-0.02, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = out / "study_profiles.png"
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    files.append(path)
+    return files
+
+
+def robustness_figure(eval_json: PathLike, out: PathLike, dpi: int = 150) -> Path:
+    """Survival against magnitude per disturbance of an evaluation's robustness card."""
+    report = json.loads(Path(eval_json).read_text(encoding="utf-8"))
+    rows = report.get("robustness")
+    if not rows:
+        raise ValueError(f"{eval_json} has no robustness card (esrl eval POLICY --robustness)")
+    base = next((r for r in rows if r["disturbance"] is None), None)
+    kinds: Dict[str, List[Any]] = {}
+    for r in rows:
+        d = r["disturbance"]
+        if d is not None:
+            kinds.setdefault(d["kind"], []).append((float(d["value"]), r))
+    nominal = {"push_sagittal": 0.0, "push_lateral": 0.0, "friction": 1.0, "mass": 1.0,
+               "strength": 1.0, "slope": 0.0, "obs_noise": 0.0, "delay": 0.0}
+    if base is not None:
+        for kind, pts in kinds.items():
+            if kind in nominal:
+                pts.append((nominal[kind], base))
+    units = {"push_sagittal": "m/s", "push_lateral": "m/s", "friction": "coefficient",
+             "mass": "scale", "strength": "scale", "slope": "degrees", "obs_noise": "SD",
+             "delay": "control steps"}
+    plt = _plt()
+    n = len(kinds)
+    cols = 4
+    fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(3.0 * cols, 2.4 * ((n + cols - 1) // cols)),
+                             squeeze=False)
+    for ax, (kind, pts) in zip(axes.flat, kinds.items()):
+        pts.sort(key=lambda p: p[0])
+        x = [p[0] for p in pts]
+        ax.plot(x, [p[1]["survived"] / p[1]["episodes"] for p in pts], "o-", label="stayed up")
+        ax.plot(x, [p[1]["finished"] / p[1]["episodes"] for p in pts], "s--", label="finished")
+        ax.set_title(kind, fontsize=9)
+        ax.set_xlabel(units.get(kind, ""), fontsize=8)
+        ax.set_ylim(-0.05, 1.05)
+        ax.grid(alpha=0.3)
+    for ax in list(axes.flat)[n:]:
+        ax.axis("off")
+    axes.flat[0].legend(fontsize=7)
+    fig.suptitle(f"{report.get('run', '')}: share of {rows[0]['episodes']} episodes, the "
+                 "undisturbed task at the nominal value", fontsize=9)
+    fig.tight_layout()
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "robustness.png"
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
