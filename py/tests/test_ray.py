@@ -142,3 +142,61 @@ def test_an_existing_run_folder_is_an_error_not_a_traceback(tmp_path: Path) -> N
     assert proc.returncode == 2, proc.stderr[-2000:]
     assert "already holds a run" in proc.stderr and "--resume" in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+STUDY = """
+seeds = 2
+[eval]
+episodes = 2
+[[arm]]
+name = "essac"
+agent = "es-sac"
+preset = "smoke"
+generations = 3
+[[arm]]
+name = "sac"
+agent = "sac"
+preset = "smoke"
+episodes = 3
+"""
+
+
+def _records(folder: Path) -> Dict[str, str]:
+    """Every record file but wall-clock times, by path."""
+    out = {}
+    for p in sorted((folder / "records").rglob("*")):
+        if not p.is_file():
+            continue
+        key = str(p.relative_to(folder))
+        if p.suffix == ".safetensors":
+            out[key] = p.read_bytes().hex()
+        elif p.name == "metrics.csv":
+            out[key] = "\n".join(l.rsplit(",", 1)[0] for l in p.read_text().splitlines())
+        elif p.name == "summary.json":
+            import json
+            s = json.loads(p.read_text())
+            s.pop("wall_s")
+            out[key] = json.dumps(s, sort_keys=True)
+        else:
+            out[key] = p.read_text()
+    return out
+
+
+def test_a_study_on_ray_gives_the_records_of_esrl_study_run(esrl_bin: Path,
+                                                           tmp_path: Path) -> None:
+    study = tmp_path / "smoke.toml"
+    study.write_text(STUDY)
+    local, on_ray = tmp_path / "local", tmp_path / "ray"
+    proc = subprocess.run([str(esrl_bin), "study", "run", str(study), "--out", str(local),
+                           "--jobs", "1", "--threads", "1"], capture_output=True, text=True,
+                          timeout=600)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    cmd = [sys.executable, "-m", "esrl_rs.ray", "study", str(study), "--out", str(on_ray),
+           "--esrl", str(esrl_bin), "--address", "local", "--workers", "2"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    a, b = _records(local), _records(on_ray)
+    # 4 runs: config, eval, metrics, summary and the policy's actor and config, plus the ES
+    # runs' best.json.
+    assert len(a) == 4 * 6 + 2, sorted(a)
+    assert a == b

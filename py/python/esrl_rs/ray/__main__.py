@@ -1,4 +1,5 @@
-"""``python -m esrl_rs.ray train AGENT``: ``esrl train`` with the population on a Ray cluster.
+"""``python -m esrl_rs.ray train AGENT``: ``esrl train`` with the population on a Ray cluster;
+``python -m esrl_rs.ray study STUDY.toml``: ``esrl study run`` with one Ray task per run.
 
 Options are ``esrl train``'s, plus ``--address`` (``local`` starts a cluster in this process;
 ``auto`` joins the one ``ray start`` runs on this machine; ``HOST:PORT`` or ``ray://HOST:PORT``
@@ -76,7 +77,97 @@ def _parser() -> argparse.ArgumentParser:
         help="local: CPUs of the cluster started [default: all cores]; otherwise the most "
         "rollouts in flight [default: as many as the generation has]",
     )
+    st = sub.add_parser(
+        "study",
+        help="run a study file with one Ray task per run (the folder of `esrl study run`)",
+        description="Each run of the study is one Ray task that runs `esrl study run STUDY "
+        "--shard k/n --jobs 1` for its index k (n = the study's runs) into the study folder, "
+        "which the workers must share; the records are those of `esrl study run`.",
+    )
+    st.add_argument("study", help="the study file")
+    st.add_argument("--out", metavar="DIR", help="the study folder [default: "
+                    "studies/<file stem>]; every worker must see it at the same path")
+    st.add_argument("--threads", type=int, default=1, help="threads per run [default: 1]")
+    st.add_argument("--esrl", metavar="PATH", help="the esrl binary on the workers [default: "
+                    "$ESRL_BIN, else `esrl` on the PATH]")
+    st.add_argument("--address", default="local", help="Ray cluster, as for `train`")
+    st.add_argument("--workers", type=int,
+                    help="local: CPUs of the cluster started [default: all cores]")
     return p
+
+
+def _study_runs(path: str) -> int:
+    """How many runs a study file has (its arms × seeds), as `esrl study` counts them."""
+    try:
+        import tomllib
+    except ImportError:  # Python < 3.11
+        import tomli as tomllib  # type: ignore[no-redef]
+
+    with open(path, "rb") as f:
+        study = tomllib.load(f)
+    seeds = study.get("seeds", 0)
+    n_seeds = seeds if isinstance(seeds, int) else len(seeds)
+    return len(study.get("arm", [])) * n_seeds
+
+
+def study(argv: List[str]) -> int:
+    """`esrl study run` with one Ray task per run (`--shard k/n`)."""
+    import shutil
+    import subprocess
+
+    args = _parser().parse_args(argv)
+    esrl = args.esrl or os.environ.get("ESRL_BIN") or shutil.which("esrl")
+    if not esrl:
+        print("error: no esrl binary: pass --esrl PATH, set ESRL_BIN or put esrl on the PATH",
+              file=sys.stderr)
+        return 2
+    try:
+        n = _study_runs(args.study)
+    except (OSError, ValueError) as e:
+        print(f"error: {args.study}: {e}", file=sys.stderr)
+        return 2
+    if n == 0:
+        print(f"error: {args.study} has no runs", file=sys.stderr)
+        return 2
+    out = os.path.abspath(args.out or os.path.join(
+        "studies", os.path.splitext(os.path.basename(args.study))[0]))
+    study_file = os.path.abspath(args.study)
+    try:
+        import ray
+    except ImportError:
+        print('error: Ray is not installed: pip install "esrl_rs[ray]" (or pip install ray)',
+              file=sys.stderr)
+        return 1
+    # The study folder's study.toml, written once here so that the tasks, which all check it,
+    # never write it at the same time.
+    os.makedirs(out, exist_ok=True)
+    held = os.path.join(out, "study.toml")
+    with open(study_file, "rb") as f:
+        text = f.read()
+    if not os.path.exists(held):
+        with open(held + ".tmp", "wb") as f:
+            f.write(text)
+        os.replace(held + ".tmp", held)
+    _start_ray(args.address, args.workers)
+
+    @ray.remote(num_cpus=args.threads)
+    def one_run(k: int) -> Dict[str, Any]:
+        cmd = [esrl, "study", "run", study_file, "--out", out, "--shard", f"{k}/{n}",
+               "--jobs", "1", "--threads", str(args.threads), "--no-progress"]
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        return {"k": k, "status": proc.returncode, "stderr": proc.stderr[-2000:]}
+
+    print(f"study {args.study}: {n} run(s) as Ray tasks at {args.address} → {out}",
+          file=sys.stderr, flush=True)
+    results = ray.get([one_run.remote(k) for k in range(n)])
+    ray.shutdown()
+    failed = [r for r in results if r["status"] != 0]
+    for r in failed:
+        print(f"run {r['k']} failed ({r['status']}):\n{r['stderr']}", file=sys.stderr)
+    if failed:
+        return 1
+    print(f"done; `esrl study report {out}` tabulates the records", file=sys.stderr)
+    return 0
 
 
 def _human(seconds: float) -> str:
@@ -233,6 +324,8 @@ def train(argv: List[str]) -> int:
 
 def main(argv: Optional[List[str]] = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    if argv and argv[0] == "study":
+        return study(argv)
     return train(argv)
 
 
