@@ -14,8 +14,24 @@ fn the_quick_start_runs_in_order() {
         &["train", "es-sac", "--steps", "3000", "--no-progress"],
         &["eval", "runs/es-sac-s0", "--episodes", "2"],
         &["record", "runs/es-sac-s0", "--out", "walk.svg"],
-        &["train", "es-sac", "--preset", "quick", "--generations", "2", "--no-progress"],
-        &["train", "sac", "--env", "pendulum", "--episodes", "7", "--no-progress"],
+        &[
+            "train",
+            "es-sac",
+            "--preset",
+            "quick",
+            "--generations",
+            "2",
+            "--no-progress",
+        ],
+        &[
+            "train",
+            "sac",
+            "--env",
+            "pendulum",
+            "--episodes",
+            "7",
+            "--no-progress",
+        ],
     ];
     for args in steps {
         let out = esrl_in(dir, args);

@@ -75,7 +75,7 @@ pub enum LoopOrder {
     ReplaceThenTrain,
     /// The inner cycles train the RL actor first, then replacement (decided on fitnesses
     /// measured before that training) may overwrite it, discarding the updates unevaluated.
-    /// The loop of esrl up to 2026-11; kept to reproduce and measure the difference.
+    /// An ablation switch: it measures what evaluating the trained actor is worth.
     TrainThenReplace,
 }
 

@@ -130,8 +130,8 @@ pub struct GaitThresholds {
     /// rigid stance still creeps in the simulator (`esrl-sim` crate docs, physics table), so
     /// such creep reads as `shuffle`, not `stand`.
     pub still_speed: f64,
-    /// A joint within this of a position limit counts as at the limit, rad. Default 1°
-    /// (issue 14): the limit brace of a policy that rests on a joint stop.
+    /// A joint within this of a position limit counts as at the limit, rad. Default 1°: it
+    /// shows the brace of a policy that rests on a joint stop.
     pub limit_margin: f64,
 }
 

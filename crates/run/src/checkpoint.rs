@@ -53,9 +53,9 @@ use std::collections::{BTreeMap, HashMap};
 use std::fs;
 use std::path::{Path, PathBuf};
 
-/// Version of `state.json` written now. Version 2 (issue 18) marks DDPG checkpoints whose
-/// config's `rl.policy_delay` and `rl.target_noise` were honoured; version 1 DDPG ignored them
-/// ([`legacy_ddpg_settings`]).
+/// Version of `state.json` written now. From version 2 DDPG checkpoints honour their
+/// config's `rl.policy_delay` and `rl.target_noise`; version 1 DDPG trained with 1 and 0
+/// whatever the config said ([`legacy_ddpg_settings`]).
 pub const STATE_VERSION: u32 = 2;
 
 /// The run's own part of `state.json`: how far it is, and the replay chunks its buffer is

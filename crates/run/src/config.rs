@@ -89,14 +89,14 @@ pub enum Preset {
     /// generations/episodes, eq. 12's reward on torque actions. On this task it falls
     /// (σ = 0.25 destroys the population: `results/walking/README.md`).
     Paper,
-    /// Visible learning on a 2-core machine: about 3 minutes for ES-SAC (150 generations).
+    /// Visible learning on a 2-core machine, about a minute for ES-SAC (150 generations);
+    /// it does not walk.
     Quick,
-    /// `quick` with 5× the gradient updates per generation and 895 generations: the ES-SAC
-    /// run (seed 0) that stayed up 60 s on the former hard-limit physics (about 75 minutes
-    /// on one core); on today's physics it is not that run.
+    /// `quick` with 5× the gradient updates per generation and 895 generations (the run of
+    /// `results/README.md`'s `inner1000-s0`, made on the physics before `fade` limits).
     Long,
-    /// The default: the walking recipe of `results/walking`: `quick`'s networks on joint-angle targets
-    /// around the standing pose, alive bonus 0.25, a gait clock that also prices foot
+    /// The default: the walking recipe of `results/walking`: `quick`'s networks on
+    /// joint-angle targets around the standing pose, alive bonus 0.25, a gait clock that also prices foot
     /// chatter, a track that goes on past the 50 m line with speed paid up to 1.1 m/s,
     /// clipped TD targets, 0.25 gradient updates per environment step, 4 million environment
     /// steps, the kept policy chosen by a deterministic walking check from 10 starts.
@@ -297,30 +297,19 @@ impl TrainConfig {
                 c.rl.buffer_size = 300_000;
                 c.checkpoint_every = 5;
                 if env == EnvKind::Walk {
-                    // Measured on 2 cores, ES-SAC seed 0, 150 generations, with the physics of
-                    // the time (4 solver iterations; results/iterations-4/README.md).
-                    // Feed-forward networks take 200 updates per generation in less time than
-                    // the LSTMs take 25 and learn far more (best return 79 vs 14–20), given
-                    // the O(1) observation (`walk.normalize_obs`; raw, their critic diverges).
-                    // Armature 0.5 kg·m² (a geared actuator's reflected inertia) lets a 40 Hz
-                    // torque loop balance the body (a sampled PD stands 60 s for 6 of 30 gain
-                    // pairs instead of 1, also at the `fade`-limit physics of issue 15):
-                    // episodes grow from ~80 steps to ~600–1100. Its limit-pressing stances
-                    // fall as the default's do (`crates/sim/tests/rigid_stance.rs` runs both
-                    // armatures); a hip swung at full effort is seen 6.4° past its limit
-                    // instead of ≤ 6° (crate docs of `esrl-sim`, "Physics step and joint
-                    // limits"). α₀ = 0.05
-                    // instead of 1 keeps the entropy term at the size of eq. 12's per-step
-                    // rewards (0.025–1): with α₀ = 1 the critics' Q₀ runs to −60…−450.
+                    // Feed-forward networks with 200 updates per generation learn far more
+                    // than the LSTMs with 25 in the same time; armature 0.5 kg·m² (a geared
+                    // actuator's reflected inertia) lets a 40 Hz loop balance the body;
+                    // α₀ = 0.05 keeps the entropy term at the size of eq. 12's per-step
+                    // rewards. The measurements: `results/iterations-4/README.md` and the
+                    // `esrl-sim` crate docs ("Physics step and joint limits").
                     c.network = NetConfig::feed_forward();
                     c.inner_cycles = 200;
                     c.rl.initial_alpha = 0.05;
                     c.walk.physics.actuator_armature = 0.5;
                 }
                 if preset == Preset::Long {
-                    // Measured on the 16-iteration physics (results/README.md, `inner1000-s0`):
-                    // with 200 updates per generation ES-SAC plateaus at episodes of 1.5–2.5 s;
-                    // with 1000 its seed-0 policy stays up 60 s after 895 generations.
+                    // 5× the updates per generation (`results/README.md`, `inner1000-s0`).
                     c.generations = 895;
                     if env == EnvKind::Walk {
                         c.inner_cycles = 1000;

@@ -88,8 +88,8 @@
 //!
 //! | limits | Rapier steps × iterations (integrator step) | 60 s PD standing, max drift (< 5 cm) | overshoot seen per control step (< 6°) | peak overshoot between control steps | held from the limit (< 3°) | limit-pressing stances up 60 s, of 30 | their worst travel in 59 s (< 2.95 m) | instructions per control step |
 //! |---|---|---|---|---|---|---|---|---|
-//! | `hard` | 1 × 16 (1.56 ms; former default) | 1.5 cm | 1.1° | – | 0.2° | 5 | 2.86 m | 6.88 M |
-//! | `hard` | 1 × 4 (6.25 ms; the default before that) | 1.4 cm | 4.9° | – | 2.4° | 9 | **8.96 m** | 1.87 M |
+//! | `hard` | 1 × 16 (1.56 ms) | 1.5 cm | 1.1° | – | 0.2° | 5 | 2.86 m | 6.88 M |
+//! | `hard` | 1 × 4 (6.25 ms) | 1.4 cm | 4.9° | – | 2.4° | 9 | **8.96 m** | 1.87 M |
 //! | `hard` | 4 × 1 (6.25 ms) | 1.4 cm | 6.2° | 7.5° | 2.4° | 8 | **8.76 m** | 2.24 M |
 //! | `fade`, once per 25 ms | 1 × 4 (6.25 ms) | 1.4 cm | **7.0°** | – | **3.4°** | 1 | 0.31 m | 1.87 M |
 //! | `fade` | 2 × 1 (12.5 ms) | 1.4 cm | **13.7°** | 20.9° | 1.3° | 0 | – | 1.18 M |
@@ -142,7 +142,7 @@
 //! with other builds and trainings (load average 5–7), both pinned to the same core:
 //!
 //! - wall clock, alternating runs: at load average 6–7, esrl 3.1–4.1k control steps/s,
-//!   MuJoCo 5.5–6.3k (0.61 on the means), the former default (1 × 16, `hard`) 1.2k; at load
+//!   MuJoCo 5.5–6.3k (0.61 on the means), `hard` at 1 × 16 1.2k; at load
 //!   average 4–5, esrl 4.5–4.7k, MuJoCo 8.3–8.4k (0.54–0.56);
 //! - CPU time (`perf stat -e task-clock`, long run minus short run, so start-up and
 //!   descheduling drop out; five alternating rounds in two sessions): esrl 4.8–4.9k control

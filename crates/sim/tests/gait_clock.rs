@@ -26,7 +26,11 @@ fn stance_windows_and_contact_reward_by_hand() {
     assert!((c.clearance_reward(0.3, [0.08, 0.025]) - 0.4 * 0.5 / 2.0).abs() < 1e-6);
     assert!((c.clearance_reward(0.3, [0.0, 0.08]) - 0.4 / 2.0).abs() < 1e-6);
     assert_eq!(c.clearance_reward(0.3, [0.0, -0.01]), 0.0);
-    assert_eq!(c.clearance_reward(0.05, [0.1, 0.1]), 0.0, "double support: no swing foot");
+    assert_eq!(
+        c.clearance_reward(0.05, [0.1, 0.1]),
+        0.0,
+        "double support: no swing foot"
+    );
     // Left down for φ ∈ [0, 0.6); right down for (φ + 0.5) mod 1 ∈ [0, 0.6), i.e. φ ∈
     // [0, 0.1) ∪ [0.5, 1): double support on [0, 0.1) and [0.5, 0.6).
     assert_eq!(c.stance(0.05), [true, true]);
@@ -194,13 +198,30 @@ fn clearance_is_paid_for_the_swing_foot_height_step_by_step() {
     let (mut paid, mut some) = (0, false);
     for k in 0..60 {
         // Lift the left leg: hip and knee flexed, so its foot rises off the ground.
-        let a = if k < 30 { [-0.8, 0.8, 0.0, 0.0, 0.0, 0.0] } else { [0.0; 6] };
+        let a = if k < 30 {
+            [-0.8, 0.8, 0.0, 0.0, 0.0, 0.0]
+        } else {
+            [0.0; 6]
+        };
         let phase = env.phase();
         let step = env.step(&a);
-        let term = step.info.reward_terms.iter().find(|t| t.0 == "clearance").unwrap().1;
+        let term = step
+            .info
+            .reward_terms
+            .iter()
+            .find(|t| t.0 == "clearance")
+            .unwrap()
+            .1;
         let feet = env.foot_heights();
-        let want = if step.terminated { 0.0 } else { clock.clearance_reward(env.phase(), feet) };
-        assert!((term - want).abs() < 1e-6, "step {k} at φ {phase}: {term} vs {want}");
+        let want = if step.terminated {
+            0.0
+        } else {
+            clock.clearance_reward(env.phase(), feet)
+        };
+        assert!(
+            (term - want).abs() < 1e-6,
+            "step {k} at φ {phase}: {term} vs {want}"
+        );
         paid += usize::from(term > 0.0);
         some |= feet[0] > 0.02;
     }
@@ -208,5 +229,10 @@ fn clearance_is_paid_for_the_swing_foot_height_step_by_step() {
     // Off, there is no such term.
     let mut plain = WalkEnv::new(WalkConfig::default()).unwrap();
     plain.reset(1);
-    assert!(plain.step(&[0.0; 6]).info.reward_terms.iter().all(|t| t.0 != "clearance"));
+    assert!(plain
+        .step(&[0.0; 6])
+        .info
+        .reward_terms
+        .iter()
+        .all(|t| t.0 != "clearance"));
 }

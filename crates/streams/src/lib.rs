@@ -19,8 +19,7 @@
 //! # Derivation
 //!
 //! Most purposes mix the run seed with a purpose tag `a` and an index `b` through [`mix`]
-//! (a SplitMix64 finaliser); the tags are those esrl used before the streams were named, so
-//! runs keep their numbers:
+//! (a SplitMix64 finaliser):
 //!
 //! | purpose | key |
 //! |---|---|
@@ -35,12 +34,10 @@
 //! | [`Stream::CriticWeights`] `k` | `31·s + 2 + k` |
 //! | [`Stream::Updates`] | `s ⊕ 0x5EED_A6E7` |
 //!
-//! The individual tag `4 + g` grows with the generation and meets the fixed tags `0x7A` at
-//! g = 118 and `0xE5` at g = 225, where individual 0 drew the trainer's own stream (and the
-//! key of the perturbation streams). Those two generations take the tag `2⁶³ + 4 + g`
-//! instead, a range no other purpose uses; every other generation keeps its stream. Runs of
-//! more than 118 generations therefore differ from runs of esrl before issue 18 from
-//! generation 118 on. The crate's tests check that no two purposes share a seed.
+//! The individual tag `4 + g` grows with the generation and would meet the fixed tags `0x7A`
+//! at g = 118 and `0xE5` at g = 225; those two generations take the tag `2⁶³ + 4 + g`
+//! instead, a range no other purpose uses (CHANGELOG.md says why the tags are these). The
+//! crate's tests check that no two purposes share a seed.
 //!
 //! # Limitations
 //!

@@ -166,7 +166,7 @@ impl WalkShared {
             dq[j] = noise.joint_angle as f64 * rng.random_range(-1.0..=1.0);
             qd[j] = noise.joint_velocity as f64 * rng.random_range(-1.0..=1.0);
         }
-        // Drawn after the noise, so that `standing` resets are those of earlier versions.
+        // The pose draws come after the noise, so a `standing` reset draws the noise alone.
         let pose = match self.config.reset.pose {
             ResetPose::Mixed => {
                 [ResetPose::Standing, ResetPose::Crouch, ResetPose::Split][rng.random_range(0..3)]
@@ -192,7 +192,7 @@ impl WalkShared {
             q,
             qd,
         };
-        // Drawn last, so that resets without a clock are those of earlier versions.
+        // The phase is drawn last, so a reset without a clock draws nothing for it.
         let phase = if self.config.gait_clock.is_some() {
             rng.random_range(0.0..1.0)
         } else {
