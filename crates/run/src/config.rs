@@ -7,7 +7,7 @@
 use crate::bail;
 use crate::check::CheckConfig;
 use crate::error::{Context, Result};
-use esrl_agents::{Algo, LearnEvery, NetConfig, RlConfig};
+use esrl_agents::{Algo, NetConfig, RlConfig};
 use esrl_es::EsConfig;
 use esrl_sim::WalkConfig;
 use serde::{Deserialize, Serialize};
@@ -149,6 +149,26 @@ impl Preset {
             Preset::Smoke => "smoke",
         }
     }
+
+    /// The preset's TOML file (`crates/run/presets/<name>.toml`, embedded in the binary):
+    /// layers of `config.toml` keys, each for some agents and environments, laid over
+    /// [`TrainConfig::defaults`] in order.
+    pub fn file(self) -> &'static str {
+        match self {
+            Preset::Paper => include_str!("../presets/paper.toml"),
+            Preset::Quick => include_str!("../presets/quick.toml"),
+            Preset::Long => include_str!("../presets/long.toml"),
+            Preset::Walking => include_str!("../presets/walking.toml"),
+            Preset::Smoke => include_str!("../presets/smoke.toml"),
+        }
+    }
+}
+
+/// A preset file: its layers, in order.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PresetFile {
+    layer: Vec<toml::Table>,
 }
 
 impl AgentKind {
@@ -243,12 +263,22 @@ pub struct TrainConfig {
 }
 
 impl TrainConfig {
-    /// The settings of `preset` for `agent` on `env`.
+    /// The settings of `preset` for `agent` on `env`: the preset's embedded TOML file
+    /// (`crates/run/presets/`, [`Preset::file`]) laid over [`TrainConfig::defaults`].
     pub fn preset(agent: AgentKind, env: EnvKind, preset: Preset) -> Self {
-        let mut c = Self {
+        let mut c = Self::defaults(agent, env);
+        c.apply_preset_file(preset, 0);
+        c.preset = preset;
+        c
+    }
+
+    /// The paper's values for `agent` on `env`, before any preset: each key's default is
+    /// documented where it is declared.
+    pub fn defaults(agent: AgentKind, env: EnvKind) -> Self {
+        Self {
             agent,
             env,
-            preset,
+            preset: Preset::Paper,
             seed: 0,
             threads: 0,
             generations: 1500,
@@ -264,140 +294,45 @@ impl TrainConfig {
             network: NetConfig::default(),
             rl: RlConfig::for_algo(agent.algo()),
             es: EsConfig::default(),
-        };
-        if env == EnvKind::Walk && !agent.is_hybrid() {
-            // MATLAB's agents learn at the end of each episode, up to 100 minibatches
-            // (`LearningFrequency = -1`, `MaxMiniBatchPerEpoch = 100`).
-            c.rl.learn_every = LearnEvery::Episode;
-            c.rl.updates_per_learn = 100;
         }
-        if env == EnvKind::Pendulum {
-            // Pendulum-v1 is Markovian: feed-forward networks of 128 × 128 on batches of 128,
-            // updated every step: the sanity task learns with them in 100 episodes (SAC and
-            // TD3 reach −250 or better, `agents/tests/pendulum_learning.rs`) at a quarter of
-            // the 256-wide networks' cost per update.
-            c.network = NetConfig::feed_forward();
-            c.network.actor.fc = vec![128, 128];
-            c.network.critic.joint_fc = vec![128, 128];
-            c.rl.batch_size = 128;
-            c.episodes = 100;
-            c.generations = 20;
-            c.es.population = 10;
-            c.es.sigma = 0.05;
-        }
-        match preset {
-            Preset::Paper => {}
-            Preset::Quick | Preset::Long | Preset::Walking => {
-                c.generations = 150;
-                c.episodes = 300;
-                c.es.population = 10;
-                c.es.sigma = 0.05;
-                c.inner_cycles = 25;
-                c.rl.batch_size = 64;
-                c.rl.buffer_size = 300_000;
-                c.checkpoint_every = 5;
-                if env == EnvKind::Walk {
-                    // Feed-forward networks with 200 updates per generation learn far more
-                    // than the LSTMs with 25 in the same time; armature 0.5 kg·m² (a geared
-                    // actuator's reflected inertia) lets a 40 Hz loop balance the body;
-                    // α₀ = 0.05 keeps the entropy term at the size of eq. 12's per-step
-                    // rewards. The measurements: `results/iterations-4/README.md` and the
-                    // `esrl-sim` crate docs ("Physics step and joint limits").
-                    c.network = NetConfig::feed_forward();
-                    c.inner_cycles = 200;
-                    c.rl.initial_alpha = 0.05;
-                    c.walk.physics.actuator_armature = 0.5;
-                }
-                if preset == Preset::Long {
-                    // 5× the updates per generation (`results/README.md`, `inner1000-s0`).
-                    c.generations = 895;
-                    if env == EnvKind::Walk {
-                        c.inner_cycles = 1000;
-                    }
-                }
-                if preset == Preset::Walking {
-                    if env == EnvKind::Walk {
-                        c.walking();
-                    } else {
-                        // The recipe is for the walking task; on the pendulum the default
-                        // preset is the paper's pendulum settings.
-                        c = Self::preset(agent, env, Preset::Paper);
-                        c.preset = Preset::Walking;
-                    }
-                }
-            }
-            Preset::Smoke => {
-                c.generations = 2;
-                c.episodes = 2;
-                c.inner_cycles = 2;
-                c.es.population = 3;
-                c.rl.batch_size = 4;
-                c.rl.warm_start = 50;
-                c.rl.buffer_size = 10_000;
-                c.rl.updates_per_learn = c.rl.updates_per_learn.min(2);
-                c.network = NetConfig::tiny(c.network.recurrent());
-                c.walk.episode_seconds = 1.0;
-                c.checkpoint_every = 1;
-            }
-        }
-        c
     }
 
-    /// The `walking` preset's changes to `quick` (screens and long runs in
-    /// `results/walking/README.md`). Each is a setting of its own, and the paper's value
-    /// stays reachable by config.
-    fn walking(&mut self) {
-        // The budget is environment steps: 4 million fit 2 hours on 2 cores. The generation
-        // and episode counts are upper bounds that the step budget ends first.
-        self.max_env_steps = Some(4_000_000);
-        self.generations = 3000;
-        // `best/` as it stood at 1, 2 and 3 M steps: the higher score that replaces it later
-        // is not always the better gait.
-        self.best_every_steps = Some(1_000_000);
-        if self.agent.is_hybrid() {
-            // One gradient update per 4 environment steps: the inner cycles of a generation
-            // scale with the steps it collected.
-            self.updates_per_step = Some(0.25);
-        } else {
-            // The same ratio for plain agents: one update every 4 steps, from the start.
-            self.episodes = 100_000;
-            self.rl.learn_every = LearnEvery::Steps(4);
-            self.rl.updates_per_learn = 1;
+    /// Applies the layers of `preset`'s file that hold for this agent and environment, in
+    /// order (`depth` bounds the chain of `use`). The files are part of the binary and every
+    /// preset is resolved by `tests/presets.rs`, so a file that does not parse is a bug of
+    /// the build, not of the user's input.
+    fn apply_preset_file(&mut self, preset: Preset, depth: usize) {
+        assert!(depth < Preset::ALL.len(), "presets `use` each other in a circle");
+        let file: PresetFile = toml::from_str(preset.file())
+            .unwrap_or_else(|e| panic!("the embedded preset {}: {e}", preset.name()));
+        for mut layer in file.layer {
+            let when = layer.remove("when");
+            if !when.is_none_or(|w| self.matches(&w)) {
+                continue;
+            }
+            if let Some(base) = layer.remove("use") {
+                let base = base.as_str().and_then(Preset::parse).unwrap_or_else(|| {
+                    panic!("the embedded preset {}: `use = {base}`", preset.name())
+                });
+                *self = Self::defaults(self.agent, self.env);
+                self.apply_preset_file(base, depth + 1);
+            }
+            *self = self
+                .merged_with_table(layer)
+                .unwrap_or_else(|e| panic!("the embedded preset {}: {e:#}", preset.name()));
         }
-        // TD targets clipped to the returns the stored rewards allow: unclipped, the critic
-        // ran away late (Q to 1e10 where no return exceeds ≈ 210) in most 4 M-step runs.
-        self.rl.clip_targets = true;
-        if self.env != EnvKind::Walk {
-            return;
-        }
-        // Actions are joint-angle targets within ±0.3 rad of the standing pose, held by the
-        // in-solver servo: with full-range targets or torques every screen pressed the legs
-        // into their limits and hopped.
-        self.walk.action = esrl_sim::ActionMode::Target;
-        self.walk.target.range = Some(0.3);
-        // 0.25 per step for staying up instead of 0.025: at 0.025 the critic's ~100-step
-        // horizon values a forward dive above standing.
-        self.walk.reward.alive = 0.25;
-        // A 1 s gait clock with a reward for contacts that follow it: without it the best
-        // policy of the same budget hops (flight 31 %, alternation 0.26).
-        // Foot chatter (one-step lift-offs inside a stance) costs what a missed phase costs:
-        // without it the kept gaits shuffle.
-        self.walk.gait_clock = Some(esrl_sim::GaitClock {
-            chatter: 1.0,
-            ..esrl_sim::GaitClock::default()
+    }
+
+    /// Whether a preset layer's `when = { env = …, agent = … }` holds for this config.
+    fn matches(&self, when: &toml::Value) -> bool {
+        let field = |key: &str| when.get(key).and_then(toml::Value::as_str);
+        let env = field("env").is_none_or(|e| e == self.env.name());
+        let agent = field("agent").is_none_or(|a| match a {
+            "hybrid" => self.agent.is_hybrid(),
+            "plain" => !self.agent.is_hybrid(),
+            name => name == self.agent.name(),
         });
-        // The track goes on past the 50 m line until the time is up, and the forward term
-        // pays speed up to 1.1 m/s (50 m in 45 s): a track that ends the episode at the line
-        // pays the same forward reward at any speed (the kept walks went 0.82–0.86 m/s, just
-        // short of the line), and an open track without the cap traded the walk for
-        // 1.2–1.3 m/s hops and shuffles.
-        self.walk.end_at_finish = false;
-        self.walk.reward.forward_cap = Some(1.1);
-        // `RUN/best/` is chosen by a deterministic check from 10 starts that cover the gait
-        // clock, against the walking bar, not by one sampled rollout's return: the sampled
-        // score kept shuffles over walks and missed walks that came after an early high
-        // score (`results/walking/README.md`, "Seeds").
-        self.check = Some(CheckConfig::default());
+        env && agent
     }
 
     /// What a run of this configuration takes on a 2-core machine, as measured
@@ -492,7 +427,11 @@ impl TrainConfig {
 
     /// This config with the keys of a TOML text laid over it.
     pub fn merged_with_str(&self, text: &str) -> Result<Self> {
-        let overlay: toml::Table = toml::from_str(text)?;
+        self.merged_with_table(toml::from_str(text)?)
+    }
+
+    /// This config with the keys of a TOML table laid over it.
+    fn merged_with_table(&self, overlay: toml::Table) -> Result<Self> {
         let mut base = toml::Table::try_from(self)?;
         merge(&mut base, overlay);
         let merged: Self = toml::Value::Table(base).try_into()?;
