@@ -179,25 +179,26 @@ pub struct CompareArgs {
     /// Seeds per agent (0, 1, …).
     #[arg(long, default_value_t = 3)]
     pub seeds: u64,
-    /// Output folder: runs go to `DIR/<agent>-s<seed>`, the table to `DIR/table.{md,csv}`.
+    /// The study folder: `DIR/study.toml`, runs in `DIR/runs/<agent>-s<seed>`, records in
+    /// `DIR/records/`, the report in `DIR/report.{md,csv,json}`.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
-    /// Give every agent the same environment-step budget (that of one ES run of the preset)
-    /// instead of the same number of generations/episodes.
-    #[arg(long)]
-    pub equal_steps: bool,
     /// Runs trained at the same time [default: cores / threads].
     #[arg(long)]
     pub jobs: Option<usize>,
-    /// Evaluation rollouts per trained policy.
-    #[arg(long, default_value_t = 1)]
+    /// Deterministic evaluation episodes per trained policy.
+    #[arg(long, default_value_t = 20)]
     pub eval_episodes: usize,
-    /// Evaluate each ES run's kept policy, `RUN/best/` (the best individual of training, as
-    /// `esrl eval RUN/best`), instead of its last checkpoint (the last RL actor); plain runs
-    /// keep no other policy and are evaluated at their last checkpoint either way.
+    /// Reset seed of the first evaluation episode (then +1 each); the default, 1000, is a
+    /// start no training, walking check or `esrl eval` default uses.
+    #[arg(long, default_value_t = 1000)]
+    pub eval_seed: u64,
+    /// Evaluate each run's last checkpoint (for ES runs the last RL actor) instead of its
+    /// kept policy, `RUN/best/`.
     #[arg(long)]
-    pub eval_best: bool,
-    /// Shared training options.
+    pub eval_last: bool,
+    /// Shared training options. An equal environment-step budget for every agent: `--steps
+    /// N` (the `walking` preset's budget is 4 M steps for every agent already).
     #[command(flatten)]
     pub opts: TrainOptions,
 }

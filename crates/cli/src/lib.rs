@@ -8,6 +8,7 @@ pub mod bench;
 pub mod compare;
 pub mod eval;
 pub mod record;
+pub mod runs;
 pub mod signals;
 pub mod study;
 pub mod train;

@@ -44,12 +44,13 @@
 //! records only.
 
 use crate::args::{AgentKind, Preset, StudyArgs, StudyCommand};
-use crate::compare::{check_config, run_state, train_all, Plan, RunState};
+use crate::runs::{check_config, run_state, train_all, Plan, RunState};
 use anyhow::{bail, Context, Result};
 use esrl_eval::{evaluate_with, load_run_pick, EvalOptions, EvalReport, Pick};
 use esrl_metrics::{
-    gait_classes_text, iqm_interval, probability_of_improvement_interval, summarize_method, table1,
-    table1_markdown, wilson, AgentRuns, GaitClass, Interval, SeedResult, Z95,
+    actuator_markdown, gait_classes_text, iqm_interval, joint_markdown,
+    probability_of_improvement_interval, summarize_method, table1, table1_markdown, wilson,
+    AgentRuns, GaitClass, Interval, SeedResult, Z95,
 };
 use esrl_run::checkpoint::{BEST, BEST_INFO};
 use esrl_run::run_dir::{write_atomic, write_json_atomic};
@@ -309,7 +310,7 @@ fn parse_shard(text: &str) -> Result<(usize, usize)> {
     }
 }
 
-fn run_study(
+pub(crate) fn run_study(
     path: &Path,
     out: Option<&Path>,
     jobs: Option<usize>,
@@ -391,8 +392,9 @@ fn run_study(
     }
     if crate::signals::requested().is_some() {
         bail!(
-            "stopped by a signal; the runs in progress have checkpoints and the same command \
-             continues the study"
+            "stopped by a signal before every run finished:\n  {}\nthe runs in progress have \
+             checkpoints and the same command continues the study",
+            failures.join("\n  ")
         );
     }
     for p in &plans {
@@ -670,7 +672,7 @@ fn interval_text(i: &Interval, digits: usize, scale: f64) -> String {
     )
 }
 
-fn report(dir: &Path, json_out: bool) -> Result<()> {
+pub(crate) fn report(dir: &Path, json_out: bool) -> Result<()> {
     let study = held_study(dir)?;
     let mut records = Vec::new();
     for (k, (arm, seed, _)) in study.runs.iter().enumerate() {
@@ -881,8 +883,20 @@ fn report(dir: &Path, json_out: bool) -> Result<()> {
                 .collect(),
         });
     }
+    let table = table1(&agents)?;
     md.push_str("\n## Table 1 (mean ± sample SD across seeds)\n\n");
-    md.push_str(&table1_markdown(&table1(&agents)?));
+    md.push_str(&table1_markdown(&table));
+    if table.iter().any(|r| r.gait_runs > 0) {
+        md.push_str("\n## Mean |torque| and |power| per actuator (paper Fig. 5d)\n\n");
+        md.push_str(&actuator_markdown(&table));
+    }
+    if table.iter().any(|r| !r.joint_names.is_empty()) {
+        md.push_str(
+            "\n## Range of motion (5th–95th percentile) and time within 1° of a limit per \
+             joint\n\n",
+        );
+        md.push_str(&joint_markdown(&table));
+    }
     md.push_str(
         "\nKnee flexion: the larger of the two knees' 95th-percentile angle; knee asym.: \
          |T_L − T_R| / ((T_L + T_R)/2) of the mean |knee torque|; steps to walk: environment \

@@ -1,46 +1,42 @@
-//! Contract: `esrl compare --agents es-sac,sac --seeds 2 --preset smoke` trains and evaluates
-//! every agent × seed and writes table.md / table.csv with one row per agent, whose nAUC is
-//! the mean over seeds of the nAUC recomputed here from each run's metrics.jsonl, and a
-//! budget table with each run's length and environment steps from its summary.json; a second
-//! invocation reuses the finished runs (no file of theirs is rewritten) and writes the same
-//! table; while training, each run logs lines prefixed with its name; unknown agent names
-//! fail with the list of valid ones. With `--eval-best` the ES
-//! rows come from each ES run's kept policy (`RUN/best/eval.json`, the same numbers as `esrl
-//! eval RUN/best`), the plain rows from the last checkpoint as before, and a repeat
-//! re-evaluates nothing.
+//! Contract: `esrl compare` is a front for a study. `esrl compare --agents es-sac,sac --seeds
+//! 2 --preset smoke --out DIR` writes the study its options describe to `DIR/study.toml`
+//! (one arm per agent), trains and records every agent × seed under `DIR/runs/` and
+//! `DIR/records/`, and writes the report `esrl study report DIR` writes (Table 1 with one row
+//! per agent, the per-actuator and per-joint tables); while training, each run logs lines
+//! prefixed with its name. A second invocation trains and evaluates nothing and writes the
+//! same report; `esrl study run DIR/study.toml --out DIR` takes the same folder as finished;
+//! other options on the same folder are refused; `--steps N` gives every run the same
+//! environment-step budget; unknown agent names fail with the list of valid ones.
 
 mod common;
 
-use common::{curve, esrl, ok_output as ok, read_json};
+use common::{esrl, ok_output as ok, read_json};
 use std::path::Path;
 use std::time::SystemTime;
 
-fn nauc(run: &Path) -> f64 {
-    let curve = curve(run);
-    curve.iter().sum::<f64>() / curve.len() as f64
-}
+const RUNS: [&str; 4] = ["es-sac-s0", "es-sac-s1", "sac-s0", "sac-s1"];
 
 fn mtimes(dir: &Path) -> Vec<(String, SystemTime)> {
     let mut out = Vec::new();
-    for run in ["es-sac-s0", "es-sac-s1", "sac-s0", "sac-s1"] {
+    for run in RUNS {
         for f in [
-            "metrics.jsonl",
-            "summary.json",
-            "checkpoint/state.json",
-            "eval.json",
+            "runs/{run}/metrics.jsonl",
+            "runs/{run}/summary.json",
+            "runs/{run}/checkpoint/state.json",
+            "records/{run}/eval.json",
         ] {
-            let p = dir.join(run).join(f);
+            let p = dir.join(f.replace("{run}", run));
             let t = std::fs::metadata(&p)
                 .and_then(|m| m.modified())
                 .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-            out.push((format!("{run}/{f}"), t));
+            out.push((p.display().to_string(), t));
         }
     }
     out
 }
 
 /// `esrl compare` of ES-SAC and SAC, 2 seeds each, on `smoke` into `out`, two at a time,
-/// then `extra`.
+/// 2 evaluation episodes each, then `extra`.
 fn smoke_compare<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
     let mut args = vec![
         "compare",
@@ -55,19 +51,20 @@ fn smoke_compare<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
         "--no-progress",
         "--jobs",
         "2",
+        "--eval-episodes",
+        "2",
     ];
     args.extend_from_slice(extra);
     args
 }
 
 #[test]
-fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
+fn compare_runs_the_study_its_options_describe_and_reuses_it() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("cmp");
     let d = dir.to_str().unwrap();
     let args = smoke_compare(d, &[]);
     let first = ok(&args);
-    let stdout = String::from_utf8_lossy(&first.stdout).to_string();
     // Runs trained side by side report themselves by name, from their first row on.
     let log = String::from_utf8_lossy(&first.stderr);
     for (run, unit) in [
@@ -85,130 +82,104 @@ fn compare_writes_one_row_per_agent_and_reuses_finished_runs() {
             "{line}"
         );
     }
-    assert!(stdout.contains("| es-sac | 2 |"), "{stdout}");
-    assert!(stdout.contains("| sac | 2 |"), "{stdout}");
-
-    let md = std::fs::read_to_string(dir.join("table.md")).unwrap();
+    let study = std::fs::read_to_string(dir.join("study.toml")).unwrap();
+    for key in [
+        "seeds = 2",
+        "name = \"es-sac\"",
+        "name = \"sac\"",
+        "preset = \"smoke\"",
+        "episodes = 2",
+    ] {
+        assert!(study.contains(key), "`{key}` missing from\n{study}");
+    }
+    for run in RUNS {
+        let eval = read_json(&dir.join("records").join(run).join("eval.json"));
+        assert_eq!(eval["episodes"].as_array().unwrap().len(), 2, "{run}");
+        assert_eq!(eval["seed"], 1000, "{run}");
+    }
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    let stdout = String::from_utf8_lossy(&first.stdout).to_string();
+    assert_eq!(stdout, md, "the report is printed and written");
     let rows: Vec<&str> = md.lines().filter(|l| l.starts_with("| ")).collect();
-    // Table 1, the actuator table and the joint table: one row per agent each.
+    // Per arm, Table 1, the actuator table and the joint table: one row per agent each, and
+    // one per run in the run table.
     assert_eq!(
         rows.iter().filter(|l| l.starts_with("| es-sac |")).count(),
-        3
+        4,
+        "{md}"
     );
-    assert_eq!(rows.iter().filter(|l| l.starts_with("| sac |")).count(), 3);
+    assert_eq!(
+        rows.iter().filter(|l| l.starts_with("| sac |")).count(),
+        4,
+        "{md}"
+    );
     assert!(md.contains("left_knee ROM (°)"), "{md}");
     assert!(md.contains("Best-Win-50") && md.contains("Episodes-to-Target"));
-    // The budget table: one row per run, with the run's own generations/episodes and steps.
-    assert!(md.contains("## Budget per run"), "{md}");
-    for run in ["es-sac-s0", "es-sac-s1", "sac-s0", "sac-s1"] {
-        let summary = read_json(&dir.join(run).join("summary.json"));
-        let unit = if run.starts_with("es-") {
-            "generations"
-        } else {
-            "episodes"
-        };
-        let row = format!(
-            "| {run} | {} {unit} | {} |",
-            summary["length"], summary["env_steps"]
-        );
-        assert!(md.contains(&row), "missing `{row}` in:\n{md}");
-    }
 
-    let csv = std::fs::read_to_string(dir.join("table.csv")).unwrap();
-    let lines: Vec<&str> = csv.lines().collect();
-    assert_eq!(lines.len(), 3, "header + one row per agent:\n{csv}");
-    let header: Vec<&str> = lines[0].split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
-    for (line, agent) in lines[1..].iter().zip(["es-sac", "sac"]) {
-        let cells: Vec<&str> = line.split(',').collect();
-        assert_eq!(cells[0], agent);
-        assert_eq!(cells[col("seeds")], "2");
-        let want =
-            (nauc(&dir.join(format!("{agent}-s0"))) + nauc(&dir.join(format!("{agent}-s1")))) / 2.0;
-        let got: f64 = cells[col("nauc_mean")].parse().unwrap();
-        assert!(
-            (got - want).abs() < 1e-9 * (1.0 + want.abs()),
-            "{agent}: {got} vs {want}"
-        );
-        assert_eq!(cells[col("gait_runs")], "2", "both seeds evaluated");
-        assert_eq!(cells[col("q0_mean_n")], "2");
-    }
-
+    // The same report from `esrl study report`, and nothing redone the second time.
+    let again = ok(&["study", "report", d]);
+    assert_eq!(String::from_utf8_lossy(&again.stdout), md);
     let before = mtimes(&dir);
     let second = ok(&args);
     let err = String::from_utf8_lossy(&second.stderr);
-    assert_eq!(err.matches("reusing finished run").count(), 4, "{err}");
     assert!(!err.contains("training "), "nothing retrained: {err}");
-    assert_eq!(
-        mtimes(&dir),
-        before,
-        "finished runs and their evaluations are untouched"
-    );
-    assert_eq!(String::from_utf8_lossy(&second.stdout), stdout);
-    assert_eq!(std::fs::read_to_string(dir.join("table.csv")).unwrap(), csv);
-}
+    assert!(err.contains("0 to train"), "{err}");
+    assert_eq!(mtimes(&dir), before, "runs and records are untouched");
+    assert_eq!(String::from_utf8_lossy(&second.stdout), md);
+    let study_run = ok(&[
+        "study",
+        "run",
+        dir.join("study.toml").to_str().unwrap(),
+        "--out",
+        d,
+    ]);
+    assert!(String::from_utf8_lossy(&study_run.stderr).contains("0 to train"));
 
-/// Column `name` of the agent's row of a table.csv.
-fn csv_cell(csv: &str, agent: &str, name: &str) -> String {
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = header.iter().position(|h| *h == name).unwrap();
-    let row = lines
-        .find(|l| l.split(',').next() == Some(agent))
-        .unwrap_or_else(|| panic!("no row {agent} in\n{csv}"));
-    row.split(',').nth(col).unwrap().to_string()
+    // Other options on the same folder: refused, nothing touched.
+    let other = esrl(&smoke_compare(d, &["--steps", "100000"])[..]);
+    assert_eq!(other.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&other.stderr);
+    assert!(err.contains("holds another comparison"), "{err}");
+    assert_eq!(mtimes(&dir), before);
 }
 
 #[test]
-fn eval_best_tabulates_the_kept_policies_of_es_runs() {
+fn steps_gives_every_run_the_same_budget() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path().join("cmp");
     let d = dir.to_str().unwrap();
-    let args = smoke_compare(d, &["--eval-episodes", "2", "--eval-best"]);
-    ok(&args);
-    let md = std::fs::read_to_string(dir.join("table.md")).unwrap();
-    assert!(
-        md.contains("each ES run's kept policy (`RUN/best/`"),
-        "{md}"
-    );
-    let csv = std::fs::read_to_string(dir.join("table.csv")).unwrap();
-    // Each evaluated policy's mean, as `esrl eval` would write it.
-    let mean_velocity = |report: &Path| {
-        let r = read_json(report);
-        assert_eq!(r["episodes"].as_array().unwrap().len(), 2);
-        r["mean"]["gait"]["mean_forward_velocity"].as_f64().unwrap()
-    };
-    for (agent, file) in [("es-sac", "best/eval.json"), ("sac", "eval.json")] {
-        let want = (mean_velocity(&dir.join(format!("{agent}-s0")).join(file))
-            + mean_velocity(&dir.join(format!("{agent}-s1")).join(file)))
-            / 2.0;
-        let got: f64 = csv_cell(&csv, agent, "mean_forward_velocity_mean")
-            .parse()
+    ok(&[
+        "compare",
+        "--agents",
+        "sac,es-td3",
+        "--seeds",
+        "1",
+        "--preset",
+        "smoke",
+        "--generations",
+        "50",
+        "--episodes",
+        "50",
+        "--steps",
+        "600",
+        "--eval-episodes",
+        "1",
+        "--out",
+        d,
+        "--no-progress",
+    ]);
+    for run in ["sac-s0", "es-td3-s0"] {
+        let cfg = std::fs::read_to_string(dir.join("runs").join(run).join("config.toml")).unwrap();
+        assert!(cfg.contains("max_env_steps = 600"), "{run}: {cfg}");
+        let steps = read_json(&dir.join("runs").join(run).join("summary.json"))["env_steps"]
+            .as_u64()
             .unwrap();
+        // Each stops at the first episode/generation boundary past the budget.
         assert!(
-            (got - want).abs() < 1e-9 * (1.0 + want.abs()),
-            "{agent}: {got} vs {want}"
+            (600..600 + 400).contains(&steps),
+            "{run}: {steps} env steps"
         );
     }
-    // The ES runs' last checkpoints were not evaluated, plain runs keep no best/.
-    for run in ["es-sac-s0", "es-sac-s1"] {
-        assert!(!dir.join(run).join("eval.json").exists(), "{run}");
-    }
-    assert!(!dir.join("sac-s0/best").exists());
-    // `esrl eval RUN/best` gives the same report.
-    let best = dir.join("es-sac-s0/best");
-    let tabulated = read_json(&best.join("eval.json"));
-    ok(&["eval", best.to_str().unwrap(), "--episodes", "2"]);
-    assert_eq!(
-        read_json(&best.join("eval.json"))["mean"],
-        tabulated["mean"]
-    );
-    // A repeat reuses every evaluation.
-    let stamp = |p: &Path| std::fs::metadata(p).and_then(|m| m.modified()).unwrap();
-    let before = stamp(&best.join("eval.json"));
-    ok(&args);
-    assert_eq!(stamp(&best.join("eval.json")), before);
-    assert_eq!(std::fs::read_to_string(dir.join("table.csv")).unwrap(), csv);
 }
 
 #[test]

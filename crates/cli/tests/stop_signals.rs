@@ -1,7 +1,7 @@
 //! Contract: SIGTERM and SIGINT stop a training like a finished generation: the signal is
 //! acknowledged at once, a checkpoint is written, the command exits with 128 + the signal
 //! (143, 130), and `--resume` then produces exactly the rows and weights of an uninterrupted
-//! run. A stopped `esrl compare` starts no queued run and writes no table; the same command
+//! run. A stopped `esrl compare` starts no queued run and writes no report; the same command
 //! resumes it exactly. A stopped `esrl eval` writes the report of the episodes it finished.
 #![cfg(unix)]
 
@@ -107,7 +107,7 @@ fn sigint_checkpoints_exits_130_and_resumes_exactly() {
 }
 
 /// `esrl compare` stopped by SIGTERM while its first run trains: that run checkpoints, no
-/// queued run starts, no table is written, the exit status is 143; the same command then
+/// queued run starts, no report is written, the exit status is 143; the same command then
 /// resumes and finishes, its runs identical to runs trained without a stop.
 #[test]
 fn a_stopped_comparison_starts_no_other_run_and_resumes_exactly() {
@@ -129,23 +129,28 @@ fn a_stopped_comparison_starts_no_other_run_and_resumes_exactly() {
             "--threads".into(),
             "1".into(),
             "--no-progress".into(),
+            "--eval-episodes".into(),
+            "2".into(),
             "--out".into(),
             dir.to_str().unwrap().into(),
         ]
     };
-    let first = split.join("es-td3-s0");
+    let first = split.join("runs/es-td3-s0");
     let (exit, stderr) = stop_after_three_rows(&args(&split), &first, "-TERM");
     assert_eq!(exit, Some(143), "{stderr}");
     assert!(row_count(&first) < 60, "stopped early: {stderr}");
     assert!(first.join("checkpoint/state.json").is_file());
     for queued in ["sac-s0", "td3-s0"] {
-        assert!(!split.join(queued).exists(), "{queued} started: {stderr}");
+        assert!(
+            !split.join("runs").join(queued).exists(),
+            "{queued} started: {stderr}"
+        );
         assert!(
             stderr.contains(&format!("{queued}: not started")),
             "{stderr}"
         );
     }
-    assert!(!split.join("table.md").exists(), "{stderr}");
+    assert!(!split.join("report.md").exists(), "{stderr}");
 
     let resume = args(&split);
     let resumed = ok(&resume.iter().map(String::as_str).collect::<Vec<_>>());
@@ -170,12 +175,14 @@ fn a_stopped_comparison_starts_no_other_run_and_resumes_exactly() {
     let whole = args(&straight);
     ok(&whole.iter().map(String::as_str).collect::<Vec<_>>());
     for run in ["es-td3-s0", "sac-s0", "td3-s0"] {
-        assert_eq!(rows(&straight.join(run)), rows(&split.join(run)), "{run}");
+        let (a, b) = (
+            straight.join("runs").join(run),
+            split.join("runs").join(run),
+        );
+        assert_eq!(rows(&a), rows(&b), "{run}");
+        let eval = |d: &Path| common::read_json(&d.join("records").join(run).join("eval.json"));
+        assert_eq!(eval(&straight)["mean"], eval(&split)["mean"], "{run}");
     }
-    assert_eq!(
-        std::fs::read_to_string(straight.join("table.csv")).unwrap(),
-        std::fs::read_to_string(split.join("table.csv")).unwrap()
-    );
 }
 
 #[test]

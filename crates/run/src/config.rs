@@ -302,7 +302,10 @@ impl TrainConfig {
     /// preset is resolved by `tests/presets.rs`, so a file that does not parse is a bug of
     /// the build, not of the user's input.
     fn apply_preset_file(&mut self, preset: Preset, depth: usize) {
-        assert!(depth < Preset::ALL.len(), "presets `use` each other in a circle");
+        assert!(
+            depth < Preset::ALL.len(),
+            "presets `use` each other in a circle"
+        );
         let file: PresetFile = toml::from_str(preset.file())
             .unwrap_or_else(|e| panic!("the embedded preset {}: {e}", preset.name()));
         for mut layer in file.layer {

@@ -12,7 +12,12 @@ use std::path::PathBuf;
 fn snapshot(agent: AgentKind, env: EnvKind, preset: Preset) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("tests/presets")
-        .join(format!("{}-{}-{}.toml", preset.name(), env.name(), agent.name()))
+        .join(format!(
+            "{}-{}-{}.toml",
+            preset.name(),
+            env.name(),
+            agent.name()
+        ))
 }
 
 #[test]

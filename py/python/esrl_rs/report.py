@@ -15,7 +15,7 @@ Runs are grouped by agent (``config.toml`` key ``agent``). Writes to ``DIR``:
 - ``fig5a_learning_curves_env_steps.png``: the learning curves against environment steps
   instead of generations/episodes (each seed's curve averaged over 200 equal bins of env
   steps, :func:`binned_by_steps`; mean ± SD across seeds), the axis on which a comparison at
-  equal env steps (``esrl compare --equal-steps``) is read;
+  equal env steps (``esrl compare --steps N``) is read;
 - ``table1.md`` (Table 1, the per-actuator and the per-joint tables, Markdown) and
   ``table1.csv``;
 - ``gait/<run>/``, for every run whose ``eval.json`` has the per-step trace of ``esrl eval``
@@ -405,7 +405,7 @@ def render_report(run_dirs: Sequence[Union[str, "os.PathLike[str]"]],
     Budget differences and unfinished runs are noted in ``Report.notes`` and ``table1.md``.
 
     With ``eval_best`` the gait columns, Fig. 5c/d and the gait pictures of ES runs come from
-    their kept policy, ``RUN/best/eval.json`` (as ``esrl compare --eval-best`` tabulates them);
+    their kept policy, ``RUN/best/eval.json`` (``esrl eval RUN/best`` writes it);
     plain runs keep no other policy and use ``RUN/eval.json``."""
     from matplotlib.figure import Figure  # no pyplot: no GUI backend, no global state
 
@@ -555,7 +555,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                         help="gait pictures from this time (s) of the episode (default 0)")
     parser.add_argument("--eval-best", action="store_true",
                         help="take ES runs' evaluations from their kept policy, "
-                             "RUN/best/eval.json (`esrl compare --eval-best`), instead of "
+                             "RUN/best/eval.json (`esrl eval RUN/best`), instead of "
                              "RUN/eval.json")
     parser.add_argument("--mixed", action="store_true",
                         help="pool runs of one agent even when their configurations differ "

@@ -105,7 +105,7 @@ class Run:
 
     def use_best_eval(self) -> bool:
         """Reads the evaluation of the run's kept policy, ``best/eval.json`` (``esrl eval
-        RUN/best``; ``esrl compare --eval-best``), from now on, if the run keeps one (ES runs
+        RUN/best``), from now on, if the run keeps one (ES runs
         do; plain runs keep no other policy and stay on ``eval.json``). Returns whether it
         switched."""
         best = self.path / "best"
