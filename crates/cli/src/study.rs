@@ -524,7 +524,7 @@ fn status(dir: &Path) -> Result<()> {
             }
         };
         *counts.entry(state).or_default() += 1;
-        let kept = read_eval(&record)
+        let kept = read_eval(&record)?
             .map(|r| describe_eval(&r))
             .unwrap_or_else(|| "-".into());
         println!(
@@ -546,9 +546,17 @@ fn status(dir: &Path) -> Result<()> {
     Ok(())
 }
 
-fn read_eval(record: &Path) -> Option<EvalReport> {
-    let text = fs::read_to_string(record.join(esrl_eval::EVAL_FILE)).ok()?;
-    serde_json::from_str(&text).ok()
+/// The evaluation of a record: `None` while the record is not written; an error naming the
+/// file when it is there but cannot be read.
+fn read_eval(record: &Path) -> Result<Option<EvalReport>> {
+    let p = record.join(esrl_eval::EVAL_FILE);
+    if !p.is_file() {
+        return Ok(None);
+    }
+    let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+    let report = serde_json::from_str(&text)
+        .with_context(|| format!("{}: not an evaluation report", p.display()))?;
+    Ok(Some(report))
 }
 
 /// "walk 19, run 1; 20/20 finished, 0 falls".
@@ -677,7 +685,7 @@ pub(crate) fn report(dir: &Path, json_out: bool) -> Result<()> {
     let mut records = Vec::new();
     for (k, (arm, seed, _)) in study.runs.iter().enumerate() {
         let rec_dir = dir.join("records").join(study.run_name(k));
-        let Some(eval) = read_eval(&rec_dir) else {
+        let Some(eval) = read_eval(&rec_dir)? else {
             continue;
         };
         let Some(summary) = Summary::read(&rec_dir)? else {

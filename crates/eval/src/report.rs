@@ -69,9 +69,12 @@ pub struct Trace {
     pub x: Vec<f64>,
     /// Torso y (m).
     pub y: Vec<f64>,
-    /// Torso height minus standing height (m).
+    /// Torso height minus standing height (m). Empty in the reports of versions that traced
+    /// only the path (as every field below).
+    #[serde(default)]
     pub z_error: Vec<f64>,
     /// Torso forward velocity (m/s).
+    #[serde(default)]
     pub forward_velocity: Vec<f64>,
     /// Per step, left and right foot: 1 in contact (normal force above the gait metrics'
     /// contact threshold), else 0.

@@ -54,10 +54,20 @@ pub fn wilson(successes: usize, n: usize, z: f64) -> Result<Interval> {
     let z2 = z * z;
     let centre = (k + z2 / 2.0) / (n + z2);
     let half = z / (n + z2) * (k * (n - k) / n + z2 / 4.0).sqrt();
+    // At k = 0 the lower bound is 0 and at k = n the upper is 1 exactly (centre = half
+    // there); the subtraction would leave a rounding error above the estimate.
     Ok(Interval {
         estimate: k / n,
-        lo: (centre - half).max(0.0),
-        hi: (centre + half).min(1.0),
+        lo: if successes == 0 {
+            0.0
+        } else {
+            (centre - half).max(0.0)
+        },
+        hi: if k == n {
+            1.0
+        } else {
+            (centre + half).min(1.0)
+        },
     })
 }
 
