@@ -171,8 +171,15 @@ pub(crate) fn ensure_trained(plan: &Plan, progress: bool, label: &str) -> Result
     Ok(true)
 }
 
-/// Trains the pending plans, up to `jobs` at once. Returns one result per plan, in order.
-pub(crate) fn train_all(plans: &[Plan], jobs: usize, progress: bool) -> Vec<Result<()>> {
+/// Trains the pending plans, up to `jobs` at once, and calls `then` on each as soon as it
+/// has finished (a study writes its record there, so a stopped study keeps the records of
+/// the runs it finished). Returns one result per plan, in order.
+pub(crate) fn train_all(
+    plans: &[Plan],
+    jobs: usize,
+    progress: bool,
+    then: &(dyn Fn(&Plan) -> Result<()> + Sync),
+) -> Vec<Result<()>> {
     let queue: Mutex<VecDeque<usize>> = Mutex::new((0..plans.len()).collect());
     let results: Mutex<Vec<Option<Result<()>>>> =
         Mutex::new((0..plans.len()).map(|_| None).collect());
@@ -189,7 +196,7 @@ pub(crate) fn train_all(plans: &[Plan], jobs: usize, progress: bool) -> Vec<Resu
                 let plan = &plans[i];
                 let label = format!("[{}/{total}]", i + 1);
                 let r = std::panic::catch_unwind(AssertUnwindSafe(|| {
-                    ensure_trained(plan, progress, &label)
+                    ensure_trained(plan, progress, &label).and_then(|_| then(plan))
                 }))
                 .unwrap_or_else(|_| Err(anyhow::anyhow!("training {} panicked", plan.name())))
                 .map(|_| ());

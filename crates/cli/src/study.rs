@@ -381,10 +381,22 @@ pub(crate) fn run_study(
         pending.len(),
         out.display()
     );
+    // Each run's record is written as soon as it has finished.
+    let record_of = |p: &Plan| -> Result<()> {
+        let record = out.join("records").join(p.name());
+        if !record.join(esrl_eval::EVAL_FILE).is_file() {
+            write_record(&p.dir, &record, &study.file.eval)?;
+            eprintln!("recorded {}", record.display());
+        }
+        Ok(())
+    };
     let mut failures = Vec::new();
     if !pending.is_empty() {
         let progress = jobs == 1 && !no_progress;
-        for (p, r) in pending.iter().zip(train_all(&pending, jobs, progress)) {
+        for (p, r) in pending
+            .iter()
+            .zip(train_all(&pending, jobs, progress, &record_of))
+        {
             if let Err(e) = r {
                 failures.push(format!("{}: {e:#}", p.name()));
             }
@@ -401,14 +413,11 @@ pub(crate) fn run_study(
         if run_state(&p.dir)? != RunState::Finished {
             continue;
         }
-        let record = out.join("records").join(p.name());
-        if record.join(esrl_eval::EVAL_FILE).is_file() {
-            continue;
+        if pending.iter().any(|q| q.dir == p.dir) {
+            continue; // recorded (or failed) as it finished
         }
-        if let Err(e) = write_record(&p.dir, &record, &study.file.eval) {
+        if let Err(e) = record_of(p) {
             failures.push(format!("{}: {e:#}", p.name()));
-        } else {
-            eprintln!("recorded {}", record.display());
         }
     }
     if !failures.is_empty() {

@@ -242,3 +242,59 @@ fn a_study_folder_holds_one_study_and_bad_files_are_named() {
     let err = fails(&["study", "report", tmp.path().to_str().unwrap()]);
     assert!(err.contains("not a study folder"), "{err}");
 }
+
+/// A run's record is written as soon as the run finishes, not when the whole study does: a
+/// study stopped while its second run trains keeps the first run's record.
+#[test]
+fn each_run_is_recorded_as_it_finishes() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = tmp.path().join("two.toml");
+    std::fs::write(
+        &study,
+        r#"
+seeds = [0]
+[eval]
+episodes = 1
+[[arm]]
+name = "short"
+agent = "sac"
+preset = "smoke"
+episodes = 2
+[[arm]]
+name = "long"
+agent = "sac"
+preset = "smoke"
+episodes = 100000
+"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
+        .args(["study", "run", study.to_str().unwrap(), "--out"])
+        .arg(&out)
+        .args(["--jobs", "1", "--no-progress"])
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    let first = out.join("records/short-s0/eval.json");
+    while !first.is_file() {
+        assert!(
+            started.elapsed() < Duration::from_secs(120),
+            "no record of the finished run while the study goes on"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(
+        child.try_wait().unwrap(),
+        None,
+        "the second run still trains"
+    );
+    Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert_eq!(child.wait().unwrap().code(), Some(130));
+    assert!(first.is_file());
+    assert!(!out.join("records/long-s0").exists());
+}
