@@ -25,6 +25,7 @@
 //! - A 60 s walking episode adds about 0.4 MB of trace to `eval.json`; `esrl eval` keeps the
 //!   traces of the first 10 episodes unless asked (`--traces`).
 
+pub mod disturbance;
 pub mod episode;
 pub mod load;
 pub mod recording;
@@ -32,6 +33,7 @@ pub mod report;
 pub mod robustness;
 pub mod stick;
 
+pub use disturbance::{CardRow, Disturbance};
 pub use episode::{rollout, walk_episode, Rollout, WalkEpisode};
 pub use load::{load_run, load_run_pick, locate, locate_pick, LoadedRun, Pick};
 pub use recording::{metadata, Recorder};
@@ -39,5 +41,5 @@ pub use report::{
     eval_path, evaluate, evaluate_and_write, evaluate_with, mean_gait, EpisodeEval, EvalMean,
     EvalOptions, EvalReport, Trace, EVAL_FILE,
 };
-pub use robustness::{card, card_markdown, standard_set, CardRow, Disturbance};
+pub use robustness::{card, card_markdown, standard_set};
 pub use stick::{animated_svg, render_rgb, StickFigure, StickRecorder, DEFAULT_INTERVAL};

@@ -202,11 +202,11 @@ pub struct EvalReport {
     pub mean: EvalMean,
     /// The disturbances the episodes ran under (`esrl eval --perturb`; empty: none).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub perturb: Vec<crate::robustness::Disturbance>,
+    pub perturb: Vec<crate::disturbance::Disturbance>,
     /// The robustness card (`esrl eval --robustness`): the policy under each disturbance of
     /// the standard set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub robustness: Option<Vec<crate::robustness::CardRow>>,
+    pub robustness: Option<Vec<crate::disturbance::CardRow>>,
 }
 
 /// Evaluates `loaded` on `episodes` deterministic episodes with seeds `seed, seed + 1, …`

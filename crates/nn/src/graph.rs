@@ -3,7 +3,8 @@
 //! Each op is a node holding its output value and whatever its backward needs. Ops are coarse
 //! (a whole `Linear`, a whole LSTM sequence, the Gaussian-tanh sample) so the tape stays short
 //! and almost all time goes into matrix products. The forward of each op and its backward live
-//! side by side in `crate::ops::*`; this file only records nodes and dispatches.
+//! side by side in `crate::ops::*`, which implement [`Backward`]; this file only records nodes
+//! and walks them back, and imports no op.
 //!
 //! Parameters are never copied into the graph: an op that uses a network's weights borrows
 //! the network's [`Params`] for the graph's lifetime `'a` and refers to them by a *binding*
@@ -11,7 +12,6 @@
 //! the parameter set, so the graph (and its borrows) can be dropped before the optimiser
 //! mutates the weights.
 
-use crate::ops::lstm::LstmNode;
 use crate::params::Params;
 use crate::tensor::Tensor;
 
@@ -19,94 +19,30 @@ use crate::tensor::Tensor;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Var(pub(crate) usize);
 
-/// Elementwise unary functions.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Unary {
-    Relu,
-    Tanh,
-    Sigmoid,
-    Softplus,
-    Exp,
-    Log,
-    Neg,
-    Square,
-}
-
-/// Elementwise binary functions (with (1, 1) broadcasting on either side).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Binary {
-    Add,
-    Sub,
-    Mul,
-    Div,
-    Min,
-    Max,
-}
-
-/// A recorded op with the inputs and caches its backward needs.
+/// A recorded op: a leaf, a parameter tensor, or an op with the inputs and caches its backward
+/// needs, as its module (`crate::ops::*`) defines it.
 pub(crate) enum Op {
     /// A constant or a gradient leaf; nothing to propagate.
     Leaf,
     /// A whole parameter tensor exposed as a value.
-    Param {
-        set: usize,
-        offset: usize,
-    },
-    /// `y = act([x₁ | x₂ | …]·Wᵀ + b)`.
-    Linear(Box<crate::ops::linear::LinearNode>),
-    /// A whole LSTM sequence.
-    Lstm(Box<LstmNode>),
-    Unary {
-        x: Var,
-        f: Unary,
-    },
-    Binary {
-        a: Var,
-        b: Var,
-        f: Binary,
-    },
-    Scale {
-        x: Var,
-        s: f32,
-    },
-    Clamp {
-        x: Var,
-        lo: f32,
-        hi: f32,
-    },
-    AddScalar {
-        x: Var,
-    },
-    ConcatCols {
-        a: Var,
-        b: Var,
-    },
-    SliceCols {
-        x: Var,
-        start: usize,
-    },
-    Sum {
-        x: Var,
-    },
-    Mean {
-        x: Var,
-    },
-    SumCols {
-        x: Var,
-    },
-    MeanCols {
-        x: Var,
-    },
-    Mse {
-        a: Var,
-        b: Var,
-    },
-    /// Tanh-squashed Gaussian sample with its log-probability; output `[a | log π]`.
-    GaussianTanh {
-        mean: Var,
-        std: Var,
-        eps: Tensor,
-    },
+    Param { set: usize, offset: usize },
+    /// Any other op.
+    Computed(Box<dyn Backward>),
+}
+
+impl Op {
+    /// The node of an op whose backward is `b`.
+    pub(crate) fn of(b: impl Backward + 'static) -> Self {
+        Op::Computed(Box::new(b))
+    }
+}
+
+/// The backward of a recorded op: the graph walks the tape and calls it; each op implements
+/// it beside its forward, so the graph knows no op.
+pub(crate) trait Backward: Send + Sync {
+    /// Accumulates the input gradients of the node whose forward value is `y` and whose
+    /// output gradient is `dy`.
+    fn backward(&self, y: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>);
 }
 
 pub(crate) struct Node {
@@ -323,7 +259,17 @@ impl<'a> Graph<'a> {
                 pgrads: &mut pgrads,
                 bindings: &self.bindings,
             };
-            crate::ops::backward(&node.op, &node.value, &dy, &mut ctx);
+            match &node.op {
+                Op::Leaf => {}
+                Op::Param { set, offset } => {
+                    if let Some(pg) = ctx.pgrad(*set) {
+                        for (g, d) in pg[*offset..*offset + dy.len()].iter_mut().zip(dy.data()) {
+                            *g += d;
+                        }
+                    }
+                }
+                Op::Computed(op) => op.backward(&node.value, &dy, &mut ctx),
+            }
         }
         let params = self
             .bindings

@@ -1,9 +1,80 @@
 //! Elementwise ops. Binary ops take equal shapes, or a `(1, 1)` operand on either side that is
 //! broadcast (its gradient is the sum over the broadcast).
 
-use crate::graph::{BackCtx, Binary, Graph, Op, Unary, Var};
+use crate::graph::{BackCtx, Backward, Graph, Op, Var};
 use crate::kern;
 use crate::tensor::Tensor;
+
+/// Elementwise unary functions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Unary {
+    Relu,
+    Tanh,
+    Sigmoid,
+    Softplus,
+    Exp,
+    Log,
+    Neg,
+    Square,
+}
+
+/// Elementwise binary functions (with (1, 1) broadcasting on either side).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Binary {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Min,
+    Max,
+}
+
+struct UnaryNode {
+    x: Var,
+    f: Unary,
+}
+
+struct BinaryNode {
+    a: Var,
+    b: Var,
+    f: Binary,
+}
+
+/// `s·x` (and `x + c`, whose gradient is that of `s = 1`).
+struct ScaleNode {
+    x: Var,
+    s: f32,
+}
+
+struct ClampNode {
+    x: Var,
+    lo: f32,
+    hi: f32,
+}
+
+impl Backward for UnaryNode {
+    fn backward(&self, y: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        unary_backward(self.x, self.f, y, dy, ctx);
+    }
+}
+
+impl Backward for BinaryNode {
+    fn backward(&self, _: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        binary_backward(self.a, self.b, self.f, dy, ctx);
+    }
+}
+
+impl Backward for ScaleNode {
+    fn backward(&self, _: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        scale_backward(self.x, self.s, dy, ctx);
+    }
+}
+
+impl Backward for ClampNode {
+    fn backward(&self, _: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        clamp_backward(self.x, self.lo, self.hi, dy, ctx);
+    }
+}
 
 impl Graph<'_> {
     fn unary(&mut self, x: Var, f: Unary) -> Var {
@@ -11,7 +82,7 @@ impl Graph<'_> {
         let mut out = Tensor::uninit(xv.rows(), xv.cols());
         unary_forward(f, xv.data(), out.data_mut());
         let rg = self.rg(x);
-        self.push(out, Op::Unary { x, f }, rg)
+        self.push(out, Op::of(UnaryNode { x, f }), rg)
     }
 
     /// `max(x, 0)`. Derivative: 1 where the output is positive, else 0.
@@ -63,7 +134,7 @@ impl Graph<'_> {
             xv.data().iter().map(|v| v * s).collect(),
         );
         let rg = self.rg(x);
-        self.push(out, Op::Scale { x, s }, rg)
+        self.push(out, Op::of(ScaleNode { x, s }), rg)
     }
 
     /// `min(max(x, lo), hi)` (TD3's target smoothing, action bounds). Derivative: 1 where
@@ -76,7 +147,7 @@ impl Graph<'_> {
             xv.data().iter().map(|v| v.clamp(lo, hi)).collect(),
         );
         let rg = self.rg(x);
-        self.push(out, Op::Clamp { x, lo, hi }, rg)
+        self.push(out, Op::of(ClampNode { x, lo, hi }), rg)
     }
 
     /// `x + s` for a constant `s`. Derivative: 1.
@@ -88,7 +159,7 @@ impl Graph<'_> {
             xv.data().iter().map(|v| v + s).collect(),
         );
         let rg = self.rg(x);
-        self.push(out, Op::AddScalar { x }, rg)
+        self.push(out, Op::of(ScaleNode { x, s: 1.0 }), rg)
     }
 
     fn binary(&mut self, a: Var, b: Var, f: Binary) -> Var {
@@ -111,7 +182,7 @@ impl Graph<'_> {
             *o = op(x, y);
         }
         let rg = self.rg(a) || self.rg(b);
-        self.push(out, Op::Binary { a, b, f }, rg)
+        self.push(out, Op::of(BinaryNode { a, b, f }), rg)
     }
 
     /// `a + b`. Derivatives: 1, 1.

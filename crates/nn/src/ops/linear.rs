@@ -6,7 +6,7 @@
 //! needs a gradient, pays for one.
 
 use crate::gemm::{gemm_ex, Tr};
-use crate::graph::{BackCtx, Graph, Op, Var};
+use crate::graph::{BackCtx, Backward, Graph, Op, Var};
 use crate::kern;
 use crate::ops::Act;
 use crate::params::Params;
@@ -78,14 +78,14 @@ impl<'a> Graph<'a> {
         let rg = trainable || xs.iter().any(|&x| self.rg(x));
         self.push(
             out,
-            Op::Linear(Box::new(LinearNode {
+            Op::of(LinearNode {
                 xs: xs.to_vec(),
                 set,
                 w,
                 b,
                 in_dim,
                 act,
-            })),
+            }),
             rg,
         )
     }
@@ -236,5 +236,11 @@ kern::simd_fn! {
                 *a += v;
             }
         }
+    }
+}
+
+impl Backward for LinearNode {
+    fn backward(&self, y: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        linear_backward(self, y, dy, ctx);
     }
 }

@@ -15,7 +15,7 @@
 //! blocks that need no gradient cost no backward product).
 
 use crate::gemm::{gemm, gemm_ex, Tr};
-use crate::graph::{BackCtx, Graph, Op, Var};
+use crate::graph::{BackCtx, Backward, Graph, Op, Var};
 use crate::kern;
 use crate::ops::linear::col_sum_into;
 use crate::params::Params;
@@ -158,7 +158,7 @@ impl<'a> Graph<'a> {
             c,
             tc,
         };
-        (self.push(out, Op::Lstm(Box::new(node)), rg), c_last)
+        (self.push(out, Op::of(node), rg), c_last)
     }
 }
 
@@ -462,5 +462,11 @@ fn cell_backward_row(
         dzg[j] = dcc * i * (1.0 - g * g);
         dzo[j] = d_o * og * (1.0 - og);
         dc[j] = dcc * f;
+    }
+}
+
+impl Backward for LstmNode {
+    fn backward(&self, y: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        lstm_backward(self, y, dy, ctx);
     }
 }

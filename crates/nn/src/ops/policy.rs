@@ -1,6 +1,6 @@
 //! The tanh-squashed Gaussian policy sample with its log-probability (SAC, paper eq. 1).
 
-use crate::graph::{BackCtx, Graph, Op, Var};
+use crate::graph::{BackCtx, Backward, Graph, Op, Var};
 use crate::kern;
 use crate::tensor::Tensor;
 
@@ -47,7 +47,7 @@ impl Graph<'_> {
         crate::pool::recycle(act);
         crate::pool::recycle(term);
         let rg = self.rg(mean) || self.rg(std);
-        let both = self.push(out, Op::GaussianTanh { mean, std, eps }, rg);
+        let both = self.push(out, Op::of(GaussianTanh { mean, std, eps }), rg);
         (
             self.slice_cols(both, 0, a_dim),
             self.slice_cols(both, a_dim, 1),
@@ -100,5 +100,18 @@ pub(crate) fn gaussian_tanh_backward(
                     dr[j] * (1.0 - a * a) * e[j] + dr[a_dim] * (2.0 * a * e[j] - 1.0 / s[j]);
             }
         }
+    }
+}
+
+/// Tanh-squashed Gaussian sample with its log-probability; output `[a | log π]`.
+struct GaussianTanh {
+    mean: Var,
+    std: Var,
+    eps: Tensor,
+}
+
+impl Backward for GaussianTanh {
+    fn backward(&self, y: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        gaussian_tanh_backward(self.mean, self.std, &self.eps, y, dy, ctx);
     }
 }

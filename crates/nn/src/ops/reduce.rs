@@ -1,7 +1,7 @@
 //! Reductions and the fused mean-squared error. Sums accumulate in f64 so a loss over B·T
 //! samples does not lose digits.
 
-use crate::graph::{BackCtx, Graph, Op, Var};
+use crate::graph::{BackCtx, Backward, Graph, Op, Var};
 use crate::tensor::Tensor;
 
 impl Graph<'_> {
@@ -9,7 +9,7 @@ impl Graph<'_> {
     pub fn sum(&mut self, x: Var) -> Var {
         let s: f64 = self.value(x).data().iter().map(|&v| v as f64).sum();
         let rg = self.rg(x);
-        self.push(Tensor::scalar(s as f32), Op::Sum { x }, rg)
+        self.push(Tensor::scalar(s as f32), Op::of(Sum { x }), rg)
     }
 
     /// Mean of all elements → `(1, 1)`. Derivative: 1/n for every element.
@@ -18,7 +18,7 @@ impl Graph<'_> {
         let s: f64 = xv.data().iter().map(|&v| v as f64).sum();
         let m = s / xv.len().max(1) as f64;
         let rg = self.rg(x);
-        self.push(Tensor::scalar(m as f32), Op::Mean { x }, rg)
+        self.push(Tensor::scalar(m as f32), Op::of(Mean { x }), rg)
     }
 
     /// Row sums: `(N, C)` → `(N, 1)`. Derivative: dy of the row for each element.
@@ -26,7 +26,11 @@ impl Graph<'_> {
         let xv = self.value(x);
         let out: Vec<f32> = (0..xv.rows()).map(|r| xv.row(r).iter().sum()).collect();
         let rg = self.rg(x);
-        self.push(Tensor::from_vec(xv.rows(), 1, out), Op::SumCols { x }, rg)
+        self.push(
+            Tensor::from_vec(xv.rows(), 1, out),
+            Op::of(SumCols { x }),
+            rg,
+        )
     }
 
     /// Row means: `(N, C)` → `(N, 1)`. Derivative: dy/C for each element.
@@ -37,7 +41,11 @@ impl Graph<'_> {
             .map(|r| xv.row(r).iter().sum::<f32>() / c)
             .collect();
         let rg = self.rg(x);
-        self.push(Tensor::from_vec(xv.rows(), 1, out), Op::MeanCols { x }, rg)
+        self.push(
+            Tensor::from_vec(xv.rows(), 1, out),
+            Op::of(MeanCols { x }),
+            rg,
+        )
     }
 
     /// Mean squared error `mean((a − b)²)` → `(1, 1)`.
@@ -59,7 +67,7 @@ impl Graph<'_> {
             .sum();
         let m = s / av.len().max(1) as f64;
         let rg = self.rg(a) || self.rg(b);
-        self.push(Tensor::scalar(m as f32), Op::Mse { a, b }, rg)
+        self.push(Tensor::scalar(m as f32), Op::of(Mse { a, b }), rg)
     }
 }
 
@@ -96,5 +104,58 @@ pub(crate) fn mse_backward(a: Var, b: Var, dy: &Tensor, ctx: &mut BackCtx<'_, '_
         for ((g, &x), &y) in db.data_mut().iter_mut().zip(av.data()).zip(bv.data()) {
             *g -= k * (x - y);
         }
+    }
+}
+
+struct Sum {
+    x: Var,
+}
+
+struct Mean {
+    x: Var,
+}
+
+struct SumCols {
+    x: Var,
+}
+
+struct MeanCols {
+    x: Var,
+}
+
+struct Mse {
+    a: Var,
+    b: Var,
+}
+
+impl Backward for Sum {
+    fn backward(&self, _: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        sum_backward(self.x, 1.0, dy, ctx);
+    }
+}
+
+impl Backward for Mean {
+    fn backward(&self, _: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        let n = ctx.val(self.x).len().max(1) as f32;
+        sum_backward(self.x, 1.0 / n, dy, ctx);
+    }
+}
+
+impl Backward for SumCols {
+    fn backward(&self, _: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        sum_cols_backward(self.x, 1.0, dy, ctx);
+    }
+}
+
+impl Backward for MeanCols {
+    fn backward(&self, _: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        let n = ctx.val(self.x).cols().max(1) as f32;
+        sum_cols_backward(self.x, 1.0 / n, dy, ctx);
+    }
+}
+
+impl Backward for Mse {
+    fn backward(&self, _: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        mse_backward(self.a, self.b, dy, ctx);
     }
 }

@@ -1,6 +1,6 @@
 //! Column concatenation and slicing.
 
-use crate::graph::{BackCtx, Graph, Op, Var};
+use crate::graph::{BackCtx, Backward, Graph, Op, Var};
 use crate::tensor::Tensor;
 
 impl Graph<'_> {
@@ -22,7 +22,7 @@ impl Graph<'_> {
             o[p..].copy_from_slice(bv.row(r));
         }
         let rg = self.rg(a) || self.rg(b);
-        self.push(out, Op::ConcatCols { a, b }, rg)
+        self.push(out, Op::of(ConcatCols { a, b }), rg)
     }
 
     /// Columns `start..start + len` of `x`. Derivative: dy scattered back into those columns.
@@ -39,7 +39,7 @@ impl Graph<'_> {
             out.data_mut()[r * len..(r + 1) * len].copy_from_slice(&xv.row(r)[start..start + len]);
         }
         let rg = self.rg(x);
-        self.push(out, Op::SliceCols { x, start }, rg)
+        self.push(out, Op::of(SliceCols { x, start }), rg)
     }
 }
 
@@ -82,5 +82,27 @@ pub(crate) fn slice_backward(x: Var, start: usize, dy: &Tensor, ctx: &mut BackCt
                 *g += d;
             }
         }
+    }
+}
+
+struct ConcatCols {
+    a: Var,
+    b: Var,
+}
+
+struct SliceCols {
+    x: Var,
+    start: usize,
+}
+
+impl Backward for ConcatCols {
+    fn backward(&self, _: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        concat_backward(self.a, self.b, dy, ctx);
+    }
+}
+
+impl Backward for SliceCols {
+    fn backward(&self, _: &Tensor, dy: &Tensor, ctx: &mut BackCtx<'_, '_>) {
+        slice_backward(self.x, self.start, dy, ctx);
     }
 }

@@ -1,0 +1,140 @@
+//! The disturbances of a robustness evaluation and the card's lines: what `esrl eval
+//! --perturb KIND=VALUE` parses, how each changes the walking task, and what the card
+//! reports per disturbance ([`crate::robustness`] runs them).
+
+use esrl_metrics::GaitClass;
+use esrl_run::{bail, Result};
+use esrl_sim::PushDirection;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// One disturbance at one magnitude.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", content = "value", rename_all = "snake_case")]
+pub enum Disturbance {
+    /// Sagittal pushes of this many m/s, every 5 s on average.
+    PushSagittal(f32),
+    /// Lateral pushes of this many m/s, every 5 s on average.
+    PushLateral(f32),
+    /// Ground friction coefficient (robot and ground; the task's default is 1).
+    Friction(f32),
+    /// Every link's mass and inertia times this.
+    Mass(f32),
+    /// Every actuator's effort limit times this.
+    Strength(f32),
+    /// Ground slope, degrees, positive uphill.
+    Slope(f32),
+    /// Gaussian noise of this SD on every (scaled) observation entry.
+    ObsNoise(f32),
+    /// The joints get the action of this many control steps before.
+    Delay(u32),
+}
+
+impl Disturbance {
+    /// The name used on the command line and in reports (`push_sagittal`, `friction`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Disturbance::PushSagittal(_) => "push_sagittal",
+            Disturbance::PushLateral(_) => "push_lateral",
+            Disturbance::Friction(_) => "friction",
+            Disturbance::Mass(_) => "mass",
+            Disturbance::Strength(_) => "strength",
+            Disturbance::Slope(_) => "slope",
+            Disturbance::ObsNoise(_) => "obs_noise",
+            Disturbance::Delay(_) => "delay",
+        }
+    }
+
+    /// Its magnitude and unit, for tables.
+    pub fn magnitude(self) -> (f32, &'static str) {
+        match self {
+            Disturbance::PushSagittal(v) | Disturbance::PushLateral(v) => (v, "m/s"),
+            Disturbance::Friction(v) => (v, "μ"),
+            Disturbance::Mass(v) | Disturbance::Strength(v) => (v, "×"),
+            Disturbance::Slope(v) => (v, "°"),
+            Disturbance::ObsNoise(v) => (v, "SD"),
+            Disturbance::Delay(v) => (v as f32, "steps"),
+        }
+    }
+
+    /// Parses `KIND=VALUE` (`push_sagittal=0.5`, `friction=0.4`, `slope=-5`, `delay=1`).
+    pub fn parse(text: &str) -> Result<Self> {
+        let Some((kind, value)) = text.split_once('=') else {
+            bail!("--perturb {text}: expected KIND=VALUE, e.g. push_sagittal=0.5");
+        };
+        let v: f32 = match value.trim().parse() {
+            Ok(v) if f32::is_finite(v) => v,
+            _ => bail!("--perturb {text}: `{value}` is not a number"),
+        };
+        Ok(match kind.trim() {
+            "push_sagittal" => Disturbance::PushSagittal(v),
+            "push_lateral" => Disturbance::PushLateral(v),
+            "friction" => Disturbance::Friction(v),
+            "mass" => Disturbance::Mass(v),
+            "strength" => Disturbance::Strength(v),
+            "slope" => Disturbance::Slope(v),
+            "obs_noise" => Disturbance::ObsNoise(v),
+            "delay" if v >= 0.0 && v.fract() == 0.0 => Disturbance::Delay(v as u32),
+            "delay" => bail!("--perturb {text}: the delay counts whole control steps"),
+            other => bail!(
+                "--perturb {text}: unknown disturbance `{other}`; one of push_sagittal, \
+                 push_lateral (m/s), friction (coefficient), mass, strength (scale), slope \
+                 (degrees), obs_noise (SD), delay (control steps)"
+            ),
+        })
+    }
+
+    /// Lays the disturbance over a walking configuration (the result is validated when the
+    /// environment is built).
+    pub fn apply(self, walk: &mut esrl_sim::WalkConfig) {
+        let p = &mut walk.perturb;
+        match self {
+            Disturbance::PushSagittal(v) => {
+                p.push_speed = v;
+                p.push_every = 5.0;
+                p.push_direction = PushDirection::Sagittal;
+            }
+            Disturbance::PushLateral(v) => {
+                p.push_speed = v;
+                p.push_every = 5.0;
+                p.push_direction = PushDirection::Lateral;
+            }
+            Disturbance::Friction(v) => walk.physics.friction = v,
+            Disturbance::Mass(v) => walk.physics.mass_scale = v,
+            Disturbance::Strength(v) => p.strength = v,
+            Disturbance::Slope(v) => walk.physics.slope = v.to_radians(),
+            Disturbance::ObsNoise(v) => p.obs_noise = v,
+            Disturbance::Delay(v) => p.action_delay = v,
+        }
+    }
+}
+
+/// One line of the card.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CardRow {
+    /// The disturbance (`null` for the undisturbed task).
+    pub disturbance: Option<Disturbance>,
+    /// Episodes run.
+    pub episodes: usize,
+    /// Episodes that did not fall (they finished the track or lasted the whole episode).
+    pub survived: usize,
+    /// Episodes that reached the end of the track.
+    pub finished: usize,
+    /// Mean forward speed, m/s.
+    pub speed: f64,
+    /// Episodes per gait class.
+    pub classes: BTreeMap<GaitClass, usize>,
+}
+
+impl CardRow {
+    /// "push_sagittal 0.5 m/s" (or "none").
+    pub fn label(&self) -> String {
+        match self.disturbance {
+            None => "none".into(),
+            Some(d) => {
+                let (v, unit) = d.magnitude();
+                format!("{} {v} {unit}", d.name())
+            }
+        }
+    }
+}
