@@ -623,6 +623,8 @@ struct RunRow {
     knee_asymmetry: f64,
     knee_flexion_deg: Option<f64>,
     double_support: Option<f64>,
+    /// Whether the run checked policies against the walking bar while it trained.
+    checked: bool,
     steps_to_walk: Option<f64>,
     time_to_walk_s: Option<f64>,
     env_steps: u64,
@@ -667,6 +669,7 @@ fn run_row(study: &Study, rec: &Record) -> RunRow {
         knee_asymmetry: g.map_or(f64::NAN, |g| g.knee_torque_asymmetry),
         knee_flexion_deg: knee_flexion(&rec.eval),
         double_support: g.and_then(|g| g.cycle.as_ref()).map(|c| c.double_support),
+        checked: figure("checks").is_some_and(|c| c > 0.0),
         steps_to_walk: figure("steps_to_walk"),
         time_to_walk_s: figure("time_to_walk_s"),
         env_steps: rec.summary.env_steps,
@@ -768,11 +771,17 @@ pub(crate) fn report(dir: &Path, json_out: bool) -> Result<()> {
             100.0 * rate.lo,
             100.0 * rate.hi
         );
+        // Runs made without the walking check cannot say when they first walked.
+        let checked = mine.iter().filter(|r| r.checked).count();
+        let walked_text = if checked == 0 {
+            "– (no check)".to_string()
+        } else {
+            format!("{} of {checked}", walked.len())
+        };
         md.push_str(&format!(
-            "| {} | {n} | {k} | {rate_text} | {} | {} of {n} | {} |\n",
+            "| {} | {n} | {k} | {rate_text} | {} | {walked_text} | {} |\n",
             arm.name,
             interval_text(&bw_iqm, 0, 1.0),
-            walked.len(),
             steps_iqm.map_or("–".into(), |i| interval_text(&i, 2, 1e-6) + " M"),
         ));
         arms_json.push(json!({
@@ -782,6 +791,7 @@ pub(crate) fn report(dir: &Path, json_out: bool) -> Result<()> {
             "rate": rate,
             "best_win_50_iqm": bw_iqm,
             "walked_in_training": walked.len(),
+            "checked_in_training": checked,
             "steps_to_walk_iqm": steps_iqm,
         }));
     }
