@@ -432,12 +432,12 @@ impl Hybrid {
         generation: &Generation,
         evaluated: Vec<Evaluation>,
     ) -> Result<GenerationReport, AgentError> {
-        self.tell_then(generation, evaluated, false)
+        self.tell_and_prefetch(generation, evaluated, false)
     }
 
     /// [`Hybrid::tell`]; with `prefetch`, the next generation's perturbations roll out on
     /// the evaluator while the inner cycles train.
-    fn tell_then(
+    fn tell_and_prefetch(
         &mut self,
         generation: &Generation,
         evaluated: Vec<Evaluation>,
@@ -585,7 +585,7 @@ impl Hybrid {
                 (generation, evaluated)
             }
         };
-        self.tell_then(&generation, evaluated, self.pipelined)
+        self.tell_and_prefetch(&generation, evaluated, self.pipelined)
     }
 }
 

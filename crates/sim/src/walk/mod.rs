@@ -667,7 +667,7 @@ impl Env for WalkEnv {
             short_phases,
         };
         let finite = obs.iter().all(|v| v.is_finite());
-        let outcome = reward::judge(&s.config, &torso, finite, &effort, &feet);
+        let outcome = reward::step_outcome(&s.config, &torso, finite, &effort, &feet);
         let obs = self.noisy(obs);
         let terminated =
             outcome.fell || outcome.off_course || (outcome.success && s.config.end_at_finish);

@@ -84,8 +84,9 @@ pub(super) struct Outcome {
     pub(super) success: bool,
 }
 
-/// Judges a step: `finite` says whether the observation is finite.
-pub(super) fn judge(
+/// The reward, fall, course and finish of a step: `finite` says whether the observation is
+/// finite.
+pub(super) fn step_outcome(
     config: &WalkConfig,
     torso: &Torso,
     finite: bool,
