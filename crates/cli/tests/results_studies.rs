@@ -50,7 +50,10 @@ fn every_committed_study_report_regenerates_from_its_records() {
         for file in ["report.md", "report.csv", "report.json"] {
             let want = std::fs::read_to_string(from.join(file)).unwrap();
             let got = std::fs::read_to_string(to.join(file)).unwrap();
-            assert!(got == want, "{study}/{file} does not regenerate from its records");
+            assert!(
+                got == want,
+                "{study}/{file} does not regenerate from its records"
+            );
         }
     }
 }
