@@ -68,6 +68,7 @@ pub fn study_text(args: &CompareArgs) -> Result<String> {
     if let Some(until) = opts.until {
         set.insert("stop_at_walk".into(), (until == Until::Walk).into());
     }
+    let count = |n: u64| toml::Value::Integer(i64::try_from(n).unwrap_or(i64::MAX));
     let mut arms = Vec::new();
     for agent in &agents {
         let mut arm = toml::Table::new();
@@ -81,7 +82,6 @@ pub fn study_text(args: &CompareArgs) -> Result<String> {
         if !set.is_empty() {
             arm.insert("set".into(), set.clone().into());
         }
-        let count = |n: u64| toml::Value::Integer(i64::try_from(n).unwrap_or(i64::MAX));
         if let Some(s) = opts.steps {
             arm.insert("steps".into(), count(s));
         }

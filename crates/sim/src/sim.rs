@@ -94,7 +94,8 @@ fn is_one(v: &f32) -> bool {
     *v == 1.0
 }
 
-fn is_zero(v: &f32) -> bool {
+/// Whether a setting is 0, its default (serde's `skip_serializing_if` of optional terms).
+pub(crate) fn is_zero(v: &f32) -> bool {
     *v == 0.0
 }
 

@@ -242,17 +242,13 @@ pub struct GaitClock {
     /// `clearance · min(h / clearance_height, 1) / 2`, `h` its link origin's height above
     /// where it is in the standing pose (0 below), paid as the term `clearance`. Against
     /// shuffles, whose feet tap and slide instead of stepping. Default 0 (off).
-    #[serde(skip_serializing_if = "is_zero_f32")]
+    #[serde(skip_serializing_if = "crate::sim::is_zero")]
     pub clearance: f32,
     /// The swing-foot height that earns the whole clearance reward, m. Default 0.05 (a
     /// human's foot rises 5–15 cm in mid-swing; Winter, *Biomechanics and Motor Control of
     /// Human Movement*, 4th ed.).
     #[serde(skip_serializing_if = "is_default_clearance_height")]
     pub clearance_height: f32,
-}
-
-fn is_zero_f32(v: &f32) -> bool {
-    *v == 0.0
 }
 
 fn is_default_clearance_height(v: &f32) -> bool {
