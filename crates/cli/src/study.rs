@@ -358,11 +358,19 @@ pub(crate) fn run_study(
             config: cfg.clone(),
         });
     }
+    // A run is trained unless it has finished here or its record is already written (records
+    // merged by copying from another shard or machine need no run folder).
+    let recorded = |p: &Plan| {
+        out.join("records")
+            .join(p.name())
+            .join(esrl_eval::EVAL_FILE)
+            .is_file()
+    };
     let mut pending = Vec::new();
     for p in &plans {
         if run_state(&p.dir)? == RunState::Finished {
             check_config(p)?;
-        } else {
+        } else if !recorded(p) {
             pending.push(p.clone());
         }
     }
@@ -373,9 +381,13 @@ pub(crate) fn run_study(
     for p in &mut pending {
         p.config.threads = threads;
     }
+    let held_records = plans
+        .iter()
+        .filter(|p| run_state(&p.dir).ok() != Some(RunState::Finished) && recorded(p))
+        .count();
     eprintln!(
-        "study {}: {} run(s) in this shard ({index}/{of}), {} to train, {jobs} at a time, {threads} \
-         thread(s) each → {}",
+        "study {}: {} run(s) in this shard ({index}/{of}), {} to train, {held_records} recorded \
+         without a run folder, {jobs} at a time, {threads} thread(s) each → {}",
         path.display(),
         plans.len(),
         pending.len(),

@@ -159,6 +159,34 @@ fn a_stopped_study_resumes_to_the_records_of_an_uninterrupted_one() {
     let mut all = records(&whole);
     all.sort();
     same(&merged, &all, "two shards");
+    // Shard 1's records copied into shard 0's folder: the whole study is recorded there, so
+    // running it again trains nothing (no run folder appears for the copied records).
+    for e in std::fs::read_dir(b.join("records")).unwrap() {
+        let e = e.unwrap();
+        let to = a.join("records").join(e.file_name());
+        std::fs::create_dir_all(to.join("policy")).unwrap();
+        for f in std::fs::read_dir(e.path()).unwrap() {
+            let f = f.unwrap();
+            if f.path().is_file() {
+                std::fs::copy(f.path(), to.join(f.file_name())).unwrap();
+            }
+        }
+        for f in std::fs::read_dir(e.path().join("policy")).unwrap() {
+            let f = f.unwrap();
+            std::fs::copy(f.path(), to.join("policy").join(f.file_name())).unwrap();
+        }
+    }
+    ok(&["study", "run", &study, "--out", a.to_str().unwrap()]);
+    for name in std::fs::read_dir(b.join("runs")).unwrap() {
+        let name = name.unwrap().file_name();
+        assert!(
+            !a.join("runs").join(&name).exists(),
+            "{name:?} was trained again although its record was there"
+        );
+    }
+    let mut merged = records(&a);
+    merged.sort();
+    same(&merged, &all, "merged records");
 
     // Status and report read the folder.
     let status = common::stdout(&["study", "status", whole.to_str().unwrap()]);
