@@ -1,10 +1,11 @@
 //! SAC, TD3 and DDPG with recurrent sequence replay, and the learner interface training
 //! loops drive.
 //!
-//! One [`Agent`] type covers the three algorithms; what differs between them (critics,
-//! entropy term, target smoothing, the actor's delay) is resolved once when it is built, and
-//! one update ([`Agent::update`], in `update.rs`, each loss headed by its equation) serves
-//! them all: DDPG is TD3 with one critic and its tricks off ([`RlConfig::for_algo`]).
+//! One [`Agent`] type covers the three algorithms; [`Agent::update`] dispatches on the
+//! algorithm to its update, each written top to bottom under its equation numbers in its own
+//! file (`sac.rs`, `td3.rs`; DDPG is TD3 with one critic and its tricks off,
+//! [`RlConfig::for_algo`]), with the steps they share in `update.rs` and the deterministic
+//! parallel execution over parts of the batch in `chunks.rs`.
 //! Networks come from `esrl-nn` (the paper's LSTM actor and critics, or MLPs); experience
 //! lives in an episode-aware [`ReplayBuffer`] that samples windows of consecutive steps for
 //! recurrent training (burn-in, then trained steps, never crossing an episode) or single
@@ -39,12 +40,15 @@
 
 pub mod agent;
 pub mod bench;
+mod chunks;
 pub mod config;
 pub mod learner;
 pub mod nets;
 pub mod policy;
 pub mod replay;
 pub mod rollout;
+mod sac;
+mod td3;
 pub mod train;
 pub mod update;
 
