@@ -2,7 +2,7 @@
 //!
 //! - `plan_train(agent, ...)`: a `train` command's options resolved by the same code as
 //!   `esrl train` (`esrl_run::plan`): a new run, or a run folder continued.
-//! - `Driver(plan, evaluate)`: the run's training session (`esrl_run::Training`, the same
+//! - `Driver(plan, evaluate)`: the run's training session (`esrl_run::Session`, the same
 //!   files and checkpoints as `esrl train`) whose hybrid loop hands each generation's genomes,
 //!   as bytes, to the Python callable `evaluate(list[bytes]) -> list[bytes]`. Each `step()`
 //!   runs one generation (or episode) with the interpreter released; the callable is called
@@ -12,10 +12,9 @@
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use esrl_agents::Trainer;
-use esrl_es::{Hybrid, Traffic, Transport, WireEvaluator, Worker};
-use esrl_run::{build, AgentKind, AnyLearner, EnvKind, Opening, Overrides, Preset, TrainConfig};
-use esrl_run::{TrainPlan, TrainRequest, Training};
+use esrl_es::{Traffic, Transport, WireEvaluator, Worker};
+use esrl_run::{build, AgentKind, EnvKind, Opening, Overrides, Preset, Session, TrainConfig};
+use esrl_run::{TrainPlan, TrainRequest};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
 
@@ -209,20 +208,6 @@ fn describe(py: Python<'_>, e: &PyErr) -> String {
     format!("{kind}: {}", e.value(py))
 }
 
-enum Session {
-    Plain(Box<Training<Trainer>>),
-    Hybrid(Box<Training<Hybrid>>),
-}
-
-macro_rules! with_session {
-    ($session:expr, $t:ident => $body:expr) => {
-        match $session {
-            Session::Plain($t) => $body,
-            Session::Hybrid($t) => $body,
-        }
-    };
-}
-
 /// A training session whose populations roll out through a Python callable.
 #[pyclass(name = "Driver", module = "esrl_rs._native")]
 pub struct PyDriver {
@@ -257,16 +242,8 @@ impl PyDriver {
                 let envs = build::envs(cfg.env, &cfg.walk)?;
                 cfg.check_memory(envs.obs_dim, envs.act_dim, envs.max_episode_steps)?;
                 let make = envs.make.clone();
-                Ok(match build::learner_with(cfg, &envs, shared)? {
-                    AnyLearner::Plain(t) => {
-                        let (t, o) = Training::open(cfg, &plan.root, *t, make, plan.resume)?;
-                        (Session::Plain(Box::new(t)), o)
-                    }
-                    AnyLearner::Hybrid(h) => {
-                        let (t, o) = Training::open(cfg, &plan.root, *h, make, plan.resume)?;
-                        (Session::Hybrid(Box::new(t)), o)
-                    }
-                })
+                let learner = build::learner_with(cfg, &envs, shared)?;
+                Session::open(cfg, &plan.root, learner, make, plan.resume)
             })
             .map_err(run_error)?;
         Ok(Self {
@@ -301,31 +278,30 @@ impl PyDriver {
     /// Rows done (resumed ones included).
     #[getter]
     fn rows(&self) -> PyResult<usize> {
-        Ok(with_session!(&*self.session()?, t => t.rows()))
+        Ok(self.session()?.rows())
     }
 
     /// Rows the budget asks for.
     #[getter]
     fn total(&self) -> PyResult<usize> {
-        Ok(with_session!(&*self.session()?, t => t.total()))
+        Ok(self.session()?.total())
     }
 
     /// Environment steps so far.
     #[getter]
     fn env_steps(&self) -> PyResult<u64> {
-        use esrl_agents::Learner;
-        Ok(with_session!(&*self.session()?, t => t.learner().env_steps()))
+        Ok(self.session()?.env_steps())
     }
 
     /// Training seconds so far, earlier sessions included.
     #[getter]
     fn wall_s(&self) -> PyResult<f64> {
-        Ok(with_session!(&*self.session()?, t => t.wall_s()))
+        Ok(self.session()?.wall_s())
     }
 
     /// Whether the budget is spent.
     fn done(&self) -> PyResult<bool> {
-        Ok(with_session!(&*self.session()?, t => t.done()))
+        Ok(self.session()?.done())
     }
 
     /// Runs one row (a generation, or an episode of a plain agent) with the interpreter
@@ -334,7 +310,7 @@ impl PyDriver {
         let row = py
             .detach(|| -> PyResult<esrl_run::Result<esrl_run::RowDone>> {
                 let mut session = self.session()?;
-                Ok(with_session!(&mut *session, t => t.step()))
+                Ok(session.step())
             })?
             .map_err(run_error)?;
         let d = PyDict::new(py);
@@ -350,7 +326,7 @@ impl PyDriver {
     fn finish(&self, py: Python<'_>, finished: bool) -> PyResult<()> {
         py.detach(|| -> PyResult<esrl_run::Result<()>> {
             let mut session = self.session()?;
-            Ok(with_session!(&mut *session, t => t.finish(finished)))
+            Ok(session.finish(finished))
         })?
         .map_err(run_error)
     }

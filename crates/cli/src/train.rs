@@ -5,8 +5,7 @@
 use crate::args::{EnvKind, TrainArgs};
 use crate::signals;
 use anyhow::Result;
-use esrl_agents::Learner;
-use esrl_run::{build, LearnerVisitor, Opening, TrainConfig, TrainRequest, Training};
+use esrl_run::{build, Opening, Session, TrainConfig, TrainRequest};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -120,185 +119,154 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
     let envs = build::envs(cfg.env, &cfg.walk)?;
     cfg.check_memory(envs.obs_dim, envs.act_dim, envs.max_episode_steps)?;
     let learner = build::learner(cfg, &envs)?;
-    learner.visit(Drive {
-        cfg,
-        root,
-        resume,
-        display,
-        envs: &envs,
-    })
-}
-
-/// The training loop, for a learner of either kind.
-struct Drive<'a> {
-    cfg: &'a TrainConfig,
-    root: &'a Path,
-    resume: bool,
-    display: Display,
-    envs: &'a build::Envs,
-}
-
-impl LearnerVisitor for Drive<'_> {
-    type Output = Result<bool>;
-
-    fn visit<L: Learner>(self, learner: L) -> Result<bool> {
-        let Drive {
-            cfg,
-            root,
-            resume,
-            display,
-            envs,
-        } = self;
-        let (mut training, opening) =
-            Training::open(cfg, root, learner, envs.make.clone(), resume)?;
-        if let Opening::Resumed {
-            checkpoint,
-            rows,
-            env_steps,
-        } = &opening
-        {
-            if display.verbose() {
-                eprintln!(
-                    "resuming {} from {} ({rows} rows, {env_steps} env steps)",
-                    root.display(),
-                    checkpoint.display(),
-                );
-            }
-        }
+    let (mut training, opening) = Session::open(cfg, root, learner, envs.make.clone(), resume)?;
+    if let Opening::Resumed {
+        checkpoint,
+        rows,
+        env_steps,
+    } = &opening
+    {
         if display.verbose() {
-            eprintln!("{}", banner(cfg, root, resume));
+            eprintln!(
+                "resuming {} from {} ({rows} rows, {env_steps} env steps)",
+                root.display(),
+                checkpoint.display(),
+            );
         }
-        signals::install();
-
-        let total = training.total();
-        let unit = L::UNIT;
-        let bar = progress_bar(total, training.rows(), display);
-        let log = display.verbose() && bar.is_hidden();
-        let mut last_log = Instant::now();
-        let started = Instant::now();
-        let rows_at_start = training.rows();
-        let steps_at_start = training.learner().env_steps();
-        let mut eta_told = false;
-        let mut finished = false;
-        loop {
-            if training.done() {
-                finished = true;
-                break;
-            }
-            if signals::requested().is_some() {
-                break;
-            }
-            let row = match training.step() {
-                Ok(row) => row,
-                Err(e) => {
-                    bar.finish_and_clear();
-                    return Err(e.into());
-                }
-            };
-            bar.set_position(row.rows as u64);
-            bar.set_message(format!("{} | best so far {:.1}", row.summary, row.best));
-            let elapsed = started.elapsed().as_secs_f64();
-            let measured = row.rows - rows_at_start;
-            // The first rows are no guide (a plain agent's warm start does no updates; a
-            // smoke run ends at once): estimate from at least 10 s of training.
-            if !eta_told && display.verbose() && measured >= 3 && elapsed >= 10.0 {
-                eta_told = true;
-                let left = total.saturating_sub(row.rows);
-                let pace = elapsed / measured as f64;
-                let by_rows = pace * left as f64;
-                let steps_now = training.learner().env_steps();
-                // A step budget ends the run first when the steps left take less time than
-                // the rows left, at the step rate measured so far.
-                let by_steps = cfg.max_env_steps.and_then(|b| {
-                    let rate = steps_now.saturating_sub(steps_at_start) as f64 / elapsed;
-                    let steps_left = b.saturating_sub(steps_now);
-                    let secs = steps_left as f64 / rate;
-                    (rate > 0.0 && secs < by_rows).then_some((secs, steps_left, rate))
-                });
-                let text = match by_steps {
-                    Some((secs, steps_left, rate)) => format!(
-                        "pace: {rate:.0} env steps/s over the first {measured} {unit}s: about \
-                         {} for the {steps_left} env steps left of the step budget (episodes \
-                         lengthen as the policy learns to stay up; the step rate varies less)",
-                        human_duration(secs)
-                    ),
-                    None => format!(
-                        "pace: {pace:.1} s per {unit} over the first {measured}: about {} for \
-                         the {left} left (episodes lengthen as the policy learns to stay up, so \
-                         likely more)",
-                        human_duration(by_rows)
-                    ),
-                };
-                if bar.is_hidden() {
-                    eprintln!("{text}");
-                } else {
-                    bar.println(text);
-                }
-            }
-            if display == Display::Runs
-                && (measured == 1 || last_log.elapsed().as_secs_f64() > RUNS_LINE_EVERY_S)
-            {
-                let name = root.file_name().map_or_else(
-                    || root.display().to_string(),
-                    |n| n.to_string_lossy().into_owned(),
-                );
-                let steps = training.learner().env_steps();
-                let budget = cfg.max_env_steps.map_or(String::new(), |b| format!("/{b}"));
-                eprintln!(
-                    "[{name}] {}/{total} {unit}s, {steps}{budget} env steps | best so far {:.1} \
-                     | {}",
-                    row.rows,
-                    row.best,
-                    human_duration(training.wall_s())
-                );
-                last_log = Instant::now();
-            }
-            if log && last_log.elapsed().as_secs_f64() > 10.0 {
-                let steps = match cfg.max_env_steps {
-                    Some(b) => format!(" | {}/{b} env steps", training.learner().env_steps()),
-                    None => String::new(),
-                };
-                eprintln!(
-                    "[{}/{}] {} | best so far {:.1}{steps} | {}",
-                    row.rows,
-                    total,
-                    row.summary,
-                    row.best,
-                    human_duration(training.wall_s())
-                );
-                last_log = Instant::now();
-            }
-        }
-        bar.finish_and_clear();
-        training.finish(finished)?;
-        if display.verbose() {
-            if finished {
-                eprintln!(
-                    "done: {} {unit}s, {} env steps, {} → {}",
-                    training.rows(),
-                    training.learner().env_steps(),
-                    human_duration(training.wall_s()),
-                    root.display()
-                );
-                eprint!("{}", closing(cfg, root, &training));
-            } else {
-                eprintln!(
-                    "stopped after {} {unit}s; checkpoint written. Continue with: {} train {} \
-                     --resume {}",
-                    training.rows(),
-                    esrl_run::command(),
-                    cfg.agent.name(),
-                    root.display()
-                );
-            }
-        }
-        Ok(finished)
     }
+    if display.verbose() {
+        eprintln!("{}", banner(cfg, root, resume));
+    }
+    signals::install();
+
+    let total = training.total();
+    let unit = training.unit();
+    let bar = progress_bar(total, training.rows(), display);
+    let log = display.verbose() && bar.is_hidden();
+    let mut last_log = Instant::now();
+    let started = Instant::now();
+    let rows_at_start = training.rows();
+    let steps_at_start = training.env_steps();
+    let mut eta_told = false;
+    let mut finished = false;
+    loop {
+        if training.done() {
+            finished = true;
+            break;
+        }
+        if signals::requested().is_some() {
+            break;
+        }
+        let row = match training.step() {
+            Ok(row) => row,
+            Err(e) => {
+                bar.finish_and_clear();
+                return Err(e.into());
+            }
+        };
+        bar.set_position(row.rows as u64);
+        bar.set_message(format!("{} | best so far {:.1}", row.summary, row.best));
+        let elapsed = started.elapsed().as_secs_f64();
+        let measured = row.rows - rows_at_start;
+        // The first rows are no guide (a plain agent's warm start does no updates; a
+        // smoke run ends at once): estimate from at least 10 s of training.
+        if !eta_told && display.verbose() && measured >= 3 && elapsed >= 10.0 {
+            eta_told = true;
+            let left = total.saturating_sub(row.rows);
+            let pace = elapsed / measured as f64;
+            let by_rows = pace * left as f64;
+            let steps_now = training.env_steps();
+            // A step budget ends the run first when the steps left take less time than
+            // the rows left, at the step rate measured so far.
+            let by_steps = cfg.max_env_steps.and_then(|b| {
+                let rate = steps_now.saturating_sub(steps_at_start) as f64 / elapsed;
+                let steps_left = b.saturating_sub(steps_now);
+                let secs = steps_left as f64 / rate;
+                (rate > 0.0 && secs < by_rows).then_some((secs, steps_left, rate))
+            });
+            let text = match by_steps {
+                Some((secs, steps_left, rate)) => format!(
+                    "pace: {rate:.0} env steps/s over the first {measured} {unit}s: about \
+                     {} for the {steps_left} env steps left of the step budget (episodes \
+                     lengthen as the policy learns to stay up; the step rate varies less)",
+                    human_duration(secs)
+                ),
+                None => format!(
+                    "pace: {pace:.1} s per {unit} over the first {measured}: about {} for \
+                     the {left} left (episodes lengthen as the policy learns to stay up, so \
+                     likely more)",
+                    human_duration(by_rows)
+                ),
+            };
+            if bar.is_hidden() {
+                eprintln!("{text}");
+            } else {
+                bar.println(text);
+            }
+        }
+        if display == Display::Runs
+            && (measured == 1 || last_log.elapsed().as_secs_f64() > RUNS_LINE_EVERY_S)
+        {
+            let name = root.file_name().map_or_else(
+                || root.display().to_string(),
+                |n| n.to_string_lossy().into_owned(),
+            );
+            let steps = training.env_steps();
+            let budget = cfg.max_env_steps.map_or(String::new(), |b| format!("/{b}"));
+            eprintln!(
+                "[{name}] {}/{total} {unit}s, {steps}{budget} env steps | best so far {:.1} \
+                 | {}",
+                row.rows,
+                row.best,
+                human_duration(training.wall_s())
+            );
+            last_log = Instant::now();
+        }
+        if log && last_log.elapsed().as_secs_f64() > 10.0 {
+            let steps = match cfg.max_env_steps {
+                Some(b) => format!(" | {}/{b} env steps", training.env_steps()),
+                None => String::new(),
+            };
+            eprintln!(
+                "[{}/{}] {} | best so far {:.1}{steps} | {}",
+                row.rows,
+                total,
+                row.summary,
+                row.best,
+                human_duration(training.wall_s())
+            );
+            last_log = Instant::now();
+        }
+    }
+    bar.finish_and_clear();
+    training.finish(finished)?;
+    if display.verbose() {
+        if finished {
+            eprintln!(
+                "done: {} {unit}s, {} env steps, {} → {}",
+                training.rows(),
+                training.env_steps(),
+                human_duration(training.wall_s()),
+                root.display()
+            );
+            eprint!("{}", closing(cfg, root, &training));
+        } else {
+            eprintln!(
+                "stopped after {} {unit}s; checkpoint written. Continue with: {} train {} \
+                 --resume {}",
+                training.rows(),
+                esrl_run::command(),
+                cfg.agent.name(),
+                root.display()
+            );
+        }
+    }
+    Ok(finished)
 }
 
 /// What a finished run hands over and what to run next: the kept policy and how it was
 /// chosen, when the first walk appeared, and the commands that evaluate and show it.
-fn closing<L: Learner>(cfg: &TrainConfig, root: &Path, training: &Training<L>) -> String {
+fn closing(cfg: &TrainConfig, root: &Path, training: &Session) -> String {
     let esrl = esrl_run::command();
     let dir = root.display();
     let best = root.join(esrl_run::checkpoint::BEST);
@@ -307,7 +275,7 @@ fn closing<L: Learner>(cfg: &TrainConfig, root: &Path, training: &Training<L>) -
         (Some(k), _) => {
             out += &format!(
                 "  kept:   {dir}/best/ ({} {}, {} env steps): {}\n",
-                L::UNIT,
+                training.unit(),
                 k.row,
                 k.env_steps,
                 k.result.describe()
@@ -317,7 +285,7 @@ fn closing<L: Learner>(cfg: &TrainConfig, root: &Path, training: &Training<L>) -
                     out += &format!(
                         "  walk:   the first policy at the walking bar came at {} {} ({} env \
                          steps, {} of training); every check is in {dir}/checks.jsonl\n",
-                        L::UNIT,
+                        training.unit(),
                         w.row,
                         w.env_steps,
                         human_duration(w.wall_s)

@@ -1,4 +1,4 @@
-//! Step 2 of a generation: turning genomes into episodes and fitness.
+//! Eq. 9 of a generation: turning genomes into episodes and fitness.
 //!
 //! [`Hybrid::ask`](crate::Hybrid::ask) hands out a [`Generation`]: every [`Genome`] carries
 //! what a worker needs to roll it out deterministically (its parameters, the seed of its
@@ -98,7 +98,7 @@ pub fn rollout_genome(
         }
     }
     Ok(Evaluation {
-        fitness: score / scored as f64,
+        fitness: score / scored as f64, // eq. 9
         episodes,
     })
 }

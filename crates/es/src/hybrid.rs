@@ -1,46 +1,47 @@
 //! The hybrid ES-X loop of the paper's §4–5 (Fig. 3), X ∈ {SAC, TD3, DDPG}, as ask/tell.
 //!
-//! One generation ([`Hybrid::step`] = [`Hybrid::ask`], an [`Evaluator`], [`Hybrid::tell`]):
-//! 1. [`ask`](Hybrid::ask): the population, the RL agent's current actor (individual 0) and
-//!    N − 1 perturbations θ + σεᵢ of the ES mean (eq. 8), each a [`Genome`] with its seeds;
-//! 2. the evaluator rolls every genome out ([`rollout_genome`](crate::rollout_genome)), K
-//!    episodes each, anywhere: all individuals of a generation see the same K initial states
-//!    (common random numbers, so fitness differences come from the policies); fitness is the
-//!    mean return (eq. 9);
-//! 3. [`tell`](Hybrid::tell) puts every transition into the shared replay buffer, in
-//!    individual order, and the elites update θ and σ (eqs. 10, 11);
-//! 4. elitist replacement: if the best individual's fitness beats the RL actor's, the RL actor
-//!    takes its parameters (for ES-SAC, log α too);
-//! 5. the RL agent runs its inner training cycles (one minibatch update each) on the buffer,
-//!    refining the actor step 4 left, which is individual 0 of the next generation.
+//! One generation, [`Hybrid::step`], reads top to bottom:
 //!
-//! Steps 4 and 5 in this order are the paper's (§5: the agent "runs for 50 inner training
-//! cycles to consolidate these improvements ... yielding a refined policy for the next
-//! generation"), CEM-RL's and ERL's: the gradient work is always evaluated before anything can
-//! replace it. `es.order = "train-then-replace"` ([`LoopOrder`]) runs 5 before 4, which
-//! discards the updates whenever another individual beat the untrained actor; it is kept to
-//! measure that difference.
+//! - eq. 8, [`ask`](Hybrid::ask): the population, the RL agent's current actor (individual
+//!   0) and N − 1 perturbations θ + σεᵢ of the ES mean, each a [`Genome`] with its seeds;
+//! - eq. 9, the [`Evaluator`]: every genome rolled out
+//!   ([`rollout_genome`](crate::rollout_genome)), K episodes each, anywhere; all individuals
+//!   of a generation see the same K initial states (common random numbers, so fitness
+//!   differences come from the policies); fitness is the mean return;
+//! - [`tell`](Hybrid::tell): every transition into the shared replay buffer, in individual
+//!   order; eqs. 10–11, the elites update θ and σ; elitist replacement, the RL actor taking
+//!   the best individual's parameters (for ES-SAC, log α too) if it beat the RL actor; and
+//!   the inner training cycles (one minibatch update each), refining the actor the
+//!   replacement left, which is individual 0 of the next generation.
+//!
+//! Replacement before training is the paper's order (§5: the agent "runs for 50 inner
+//! training cycles to consolidate these improvements ... yielding a refined policy for the
+//! next generation"), CEM-RL's and ERL's: the gradient work is always evaluated before
+//! anything can replace it. `es.order = "train-then-replace"` ([`LoopOrder`]) is an ablation
+//! switch: it trains first, which discards the updates whenever another individual beat the
+//! untrained actor, and exists to measure that difference.
 //!
 //! How individuals act while scored is `es.fitness` ([`Fitness`]): by default ES-SAC
 //! individuals sample their Gaussian policy (its std head and α are part of the genome, and
 //! the buffer needs exploratory data) and ES-TD3/ES-DDPG individuals act deterministically,
 //! the parameter noise being their exploration, as in CEM-RL.
 //!
-//! The learning curve is the best fitness of each generation (the fitness of the policy kept
-//! at step 4); [`Hybrid::kept`] is that policy's genome, for `RUN/best/`.
+//! The learning curve is the best fitness of each generation (the fitness of the policy
+//! kept by the replacement); [`Hybrid::kept`] is that policy's genome, for `RUN/best/`.
 //!
 //! Results do not depend on the thread count or on the evaluator: every individual's
 //! rollouts use the random streams its genome names, and results are taken in individual
 //! order.
 //!
-//! **Pipelining.** The N − 1 perturbations of generation g + 1 depend only on the ES mean and
-//! σ after generation g's step 3, not on the learner, so [`Hybrid::step`] rolls them out
-//! while step 5 trains (both on the rayon pool it runs in); only individual 0, the trained
-//! actor, waits for the training. Their transitions still enter the buffer at generation
-//! g + 1's step 3, in individual order, so the loop computes exactly what the sequential one
-//! does ([`Hybrid::set_pipelined`] turns it off; `es/tests/pipeline.rs` compares the two).
-//! The rollouts in flight are not part of a checkpoint: a run restored at a generation
-//! boundary rolls them out again, with the same result.
+//! **Pipelining** wraps the evaluator and changes no number. The N − 1 perturbations of
+//! generation g + 1 depend only on the ES mean and σ after generation g's eqs. 10–11, not on
+//! the learner, so the inner training of g runs beside their rollouts (both on the rayon
+//! pool the loop runs in), and eq. 9 of g + 1 then rolls out individual 0 alone, the trained
+//! actor. Their transitions still enter the buffer at generation g + 1's tell, in individual
+//! order, so the loop computes exactly what the sequential one does
+//! ([`Hybrid::set_pipelined`] turns it off; `es/tests/pipeline.rs` compares the two). The
+//! rollouts in flight are not part of a checkpoint: a run restored at a generation boundary
+//! rolls them out again, with the same result.
 
 use crate::evaluate::{Evaluation, Evaluator, Generation, Genome, RolloutSpec};
 use crate::strategy::{rank, EsConfig, Fitness, LoopOrder, Strategy};
@@ -367,7 +368,7 @@ impl Hybrid {
         }
     }
 
-    /// Step 1: the generation to evaluate, each genome with its action stream, the
+    /// Eq. 8: the generation to evaluate, each genome with its action stream, the
     /// generation's K initial states and the rollouts of `es.fitness`.
     pub fn ask(&self) -> Generation {
         Generation {
@@ -424,9 +425,10 @@ impl Hybrid {
             .collect()
     }
 
-    /// Steps 3–5 on the evaluations of [`Hybrid::ask`]'s generation, in individual order:
-    /// the transitions into the buffer, the ES update, elitist replacement and the inner
-    /// training cycles, in the configured order. Returns the generation's row.
+    /// The rest of a generation on the evaluations of [`Hybrid::ask`]'s generation, in
+    /// individual order: the transitions into the buffer, the ES update (eqs. 10–11), elitist
+    /// replacement and the inner training cycles, in the configured order. Returns the
+    /// generation's row.
     pub fn tell(
         &mut self,
         generation: &Generation,
@@ -475,14 +477,14 @@ impl Hybrid {
             .map(|ep| ep.first_obs().to_vec())
             .unwrap_or_default();
 
-        // 3. The ES update.
+        // Eqs. 10–11: the elites' weighted mean becomes θ, and σ decays toward σ_min.
         let fitness: Vec<f64> = evaluated.iter().map(|e| e.fitness).collect();
         let refs: Vec<&[f32]> = genomes.iter().map(|g| g.params.as_slice()).collect();
         let order = self.strategy.update(&refs, &fitness, &self.es);
         let best = order[0];
         let replaced = best != 0 && fitness[best] > fitness[0];
 
-        // 4 and 5: replacement and the inner cycles, in the configured order.
+        // Elitist replacement and the inner training cycles, in the configured order.
         let losses = match self.es.order {
             LoopOrder::ReplaceThenTrain => {
                 if replaced {
@@ -532,8 +534,36 @@ impl Hybrid {
         Ok(report)
     }
 
-    /// Step 5: `cycles` inner updates; with `prefetch`, beside them on the rayon pool, the
-    /// rollouts of the next generation's perturbations (kept for [`Hybrid::step`]; an
+    /// Runs one generation (module docs): eq. 8, eq. 9, then eqs. 10–11, replacement and
+    /// the inner training ([`Hybrid::tell`]), pipelined unless turned off.
+    pub fn step(&mut self) -> Result<GenerationReport, AgentError> {
+        let generation = self.ask(); // eq. 8
+        let evaluated = self.evaluate(&generation)?; // eq. 9
+        self.tell_and_prefetch(&generation, evaluated, self.pipelined)
+    }
+
+    /// Eq. 9 on the evaluator. Pipelined, individuals 1.. were rolled out during the last
+    /// generation's training (nothing they depend on changes between a tell and the next
+    /// step; a restore drops them), so only individual 0 is rolled out here.
+    fn evaluate(&mut self, generation: &Generation) -> Result<Vec<Evaluation>, AgentError> {
+        let ahead = self.prefetched.take().filter(|p| {
+            p.generation == generation.index && generation.genomes.get(1..) == Some(&p.genomes)
+        });
+        let Some(ahead) = ahead else {
+            return self.evaluator.evaluate(generation);
+        };
+        let first = Generation {
+            index: generation.index,
+            policy: generation.policy.clone(),
+            genomes: generation.genomes[..1].to_vec(),
+        };
+        let mut evaluated = self.evaluator.evaluate(&first)?;
+        evaluated.extend(ahead.evaluations);
+        Ok(evaluated)
+    }
+
+    /// The inner training cycles; with `prefetch`, beside them on the rayon pool, the
+    /// rollouts of the next generation's perturbations (kept for [`Hybrid::evaluate`]; an
     /// evaluation error there surfaces when that generation is evaluated again).
     fn train(&mut self, cycles: usize, prefetch: bool) -> Result<LossMeans, AgentError> {
         if !prefetch || self.es.population < 2 {
@@ -554,38 +584,6 @@ impl Hybrid {
             evaluations,
         });
         losses
-    }
-
-    /// Runs one generation: [`Hybrid::ask`], the evaluator, [`Hybrid::tell`], pipelined
-    /// (module docs) unless turned off: individuals 1.. and their evaluations are those
-    /// rolled out during the last generation's training (nothing they depend on changes
-    /// between a tell and the next step; a restore drops them), so only individual 0 is
-    /// evaluated here.
-    pub fn step(&mut self) -> Result<GenerationReport, AgentError> {
-        let ahead = self
-            .prefetched
-            .take()
-            .filter(|p| p.generation == self.generation);
-        let (generation, evaluated) = match ahead {
-            Some(p) => {
-                let agent = self.trainer.agent();
-                let mut generation = Generation {
-                    index: self.generation,
-                    policy: agent.policy(),
-                    genomes: self.genomes(self.generation, 0, [agent.genome()]),
-                };
-                let mut evaluated = self.evaluator.evaluate(&generation)?;
-                evaluated.extend(p.evaluations);
-                generation.genomes.extend(p.genomes);
-                (generation, evaluated)
-            }
-            None => {
-                let generation = self.ask();
-                let evaluated = self.evaluator.evaluate(&generation)?;
-                (generation, evaluated)
-            }
-        };
-        self.tell_and_prefetch(&generation, evaluated, self.pipelined)
     }
 }
 

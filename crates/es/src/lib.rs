@@ -15,9 +15,10 @@
 //!   [`remote`]: both ends of such an evaluator ([`WireEvaluator`] over a [`Transport`] on
 //!   the driver, [`Worker`] on the other side).
 //!
-//! Reading ES-SAC top to bottom: `hybrid.rs` (the loop, steps 1–5), `evaluate.rs` (step 2),
-//! `strategy.rs` (step 3), then `esrl_agents`' `train.rs` (the inner cycles) and `update.rs`
-//! (the SAC update, each loss under its equation).
+//! Reading ES-SAC top to bottom: `hybrid.rs` ([`Hybrid::step`]: eq. 8 → 9 → 10–11 →
+//! replacement → training), `evaluate.rs` (eq. 9), `strategy.rs` (eqs. 8, 10, 11), then
+//! `esrl_agents`' `train.rs` (the inner cycles) and `sac.rs` (the SAC update, each line under
+//! its equation).
 //!
 //! ```
 //! use esrl_agents::{Agent, Algo, NetConfig, RlConfig};

@@ -219,7 +219,7 @@ impl Strategy {
             .iter()
             .map(|&m| {
                 let e: f32 = StandardNormal.sample(&mut rng);
-                m + sigma * e
+                m + sigma * e // eq. 8
             })
             .collect()
     }
@@ -246,8 +246,8 @@ impl Strategy {
                 *m += w * f64::from(x);
             }
         }
-        self.mean = mean.into_iter().map(|m| m as f32).collect();
-        self.sigma = (1.0 - cfg.sigma_decay) * self.sigma + cfg.sigma_decay * cfg.sigma_min;
+        self.mean = mean.into_iter().map(|m| m as f32).collect(); // eq. 10
+        self.sigma = (1.0 - cfg.sigma_decay) * self.sigma + cfg.sigma_decay * cfg.sigma_min; // eq. 11
         self.generation += 1;
         order
     }

@@ -3,7 +3,7 @@
 
 use crate::config::{EnvKind, TrainConfig};
 use crate::error::{Context, Error, Result};
-use esrl_agents::{Agent, Learner, Trainer};
+use esrl_agents::{Agent, Trainer};
 use esrl_es::{Evaluator, Hybrid, LocalEvaluator, Worker};
 use esrl_sim::{Env, MakeEnv, Pendulum, RobotModel, WalkConfig, WalkEnv};
 use std::sync::Arc;
@@ -96,25 +96,6 @@ pub enum AnyLearner {
     Plain(Box<Trainer>),
     /// ES-SAC / ES-TD3 / ES-DDPG.
     Hybrid(Box<Hybrid>),
-}
-
-/// What to do with a learner of either kind: [`AnyLearner::visit`] calls it with the
-/// concrete one, so generic code (a training session) runs on both.
-pub trait LearnerVisitor {
-    /// The visit's result.
-    type Output;
-    /// Visits a learner.
-    fn visit<L: Learner>(self, learner: L) -> Self::Output;
-}
-
-impl AnyLearner {
-    /// Calls `visitor` with the learner inside.
-    pub fn visit<V: LearnerVisitor>(self, visitor: V) -> V::Output {
-        match self {
-            AnyLearner::Plain(t) => visitor.visit(*t),
-            AnyLearner::Hybrid(h) => visitor.visit(*h),
-        }
-    }
 }
 
 /// The thread pool a run computes on, `threads` threads (one per core when 0): the hybrid

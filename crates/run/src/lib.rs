@@ -9,33 +9,26 @@
 //! - [`plan`]: a `train` command's arguments ([`TrainRequest`]) turned into a configuration
 //!   and a folder, new or resumed, for every front end.
 //! - [`training`]: [`Training`] drives any [`esrl_agents::Learner`] row by row into its
-//!   folder: metrics, summary, `RUN/best/`, checkpoints.
+//!   folder: metrics, summary, `RUN/best/`, checkpoints; [`session`]: [`Session`], the
+//!   training of either kind of learner, for front ends.
 //! - [`check`]: the walking check, a deterministic multi-start evaluation against the
 //!   walking bar that chooses `RUN/best/` and times the first walk.
 //! - [`checkpoint`], [`run_dir`], [`summary`]: the files, written atomically and verified
 //!   before they are trusted.
 //!
 //! ```no_run
-//! use esrl_run::{build, AgentKind, LearnerVisitor, Overrides, TrainConfig, Training};
-//! use esrl_agents::Learner;
+//! use esrl_run::{build, AgentKind, Overrides, Session, TrainConfig};
 //! use std::path::Path;
-//!
-//! struct Train<'a>(&'a TrainConfig, &'a build::Envs);
-//! impl LearnerVisitor for Train<'_> {
-//!     type Output = esrl_run::Result<()>;
-//!     fn visit<L: Learner>(self, learner: L) -> Self::Output {
-//!         let dir = Path::new("runs/es-sac-s0");
-//!         let (mut t, _) = Training::open(self.0, dir, learner, self.1.make.clone(), false)?;
-//!         while !t.done() {
-//!             println!("{}", t.step()?.summary);
-//!         }
-//!         t.finish(true)
-//!     }
-//! }
 //!
 //! let cfg = TrainConfig::resolve(AgentKind::EsSac, &Overrides::default(), Some(0))?;
 //! let envs = build::envs(cfg.env, &cfg.walk)?;
-//! build::learner(&cfg, &envs)?.visit(Train(&cfg, &envs))?;
+//! let learner = build::learner(&cfg, &envs)?;
+//! let dir = Path::new("runs/es-sac-s0");
+//! let (mut session, _) = Session::open(&cfg, dir, learner, envs.make.clone(), false)?;
+//! while !session.done() {
+//!     println!("{}", session.step()?.summary);
+//! }
+//! session.finish(true)?;
 //! # Ok::<(), esrl_run::Error>(())
 //! ```
 //!
@@ -56,6 +49,7 @@ pub mod config;
 mod error;
 pub mod plan;
 pub mod run_dir;
+pub mod session;
 pub mod summary;
 pub mod training;
 
@@ -73,10 +67,11 @@ pub fn set_command(name: impl Into<String>) {
 
 static COMMAND: std::sync::OnceLock<String> = std::sync::OnceLock::new();
 
-pub use build::{AnyLearner, Envs, LearnerVisitor};
+pub use build::{AnyLearner, Envs};
 pub use config::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
 pub use error::{Context, Error, Result};
 pub use plan::{default_out, plan, TrainPlan, TrainRequest};
 pub use run_dir::RunDir;
+pub use session::Session;
 pub use summary::Summary;
 pub use training::{Opening, RowDone, Training};
