@@ -1,7 +1,8 @@
-//! The interface every training loop drives ([`Learner`]): a learner runs one row — an
-//! episode of a plain agent ([`crate::Trainer`]), a generation of the hybrid ES loop
-//! (`esrl_es::Hybrid`) — reports it, and saves and restores its full state. Whoever drives
-//! it (the `esrl` binary, a test, a notebook) only loops, writes rows and checkpoints.
+//! The interface every training loop drives, in two small traits: [`Learner`] runs one row —
+//! an episode of a plain agent ([`crate::Trainer`]), a generation of the hybrid ES loop
+//! (`esrl_es::Hybrid`) — and reports it; [`Resumable`] saves and restores its full state.
+//! Whoever drives it (the `esrl` binary, a test, a notebook) only loops, writes rows and
+//! checkpoints.
 
 use crate::agent::{Agent, AgentError};
 use crate::replay::ReplayBuffer;
@@ -24,9 +25,9 @@ pub trait Row: Serialize + Send {
 }
 
 /// A learner's counters and random streams, as `state.json` keeps them: the RL side's, which
-/// every learner has, and the learner's own (`own`: nothing for a plain trainer, the loop's
-/// counters for the hybrid one), whose fields stand beside these in the file. Weights and the
-/// replay buffer are saved apart.
+/// every learner has, and its loop's (`loop_state`: nothing for a plain trainer, the ES
+/// loop's counters for the hybrid one), whose fields stand beside these in the file. Weights
+/// and the replay buffer are saved apart.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LearnerState<S = ()> {
     /// Training episodes completed (plain agents).
@@ -41,18 +42,18 @@ pub struct LearnerState<S = ()> {
     pub agent_rng: ChaCha8Rng,
     /// Whether the replay buffer's last episode is still open.
     pub episode_open: bool,
-    /// The learner's own counters. (Serde reads a flattened part through a buffer that
-    /// cannot hold the streams' 128-bit counters, so the streams stay out here.)
+    /// The loop's counters. (Serde reads a flattened part through a buffer that cannot hold
+    /// the streams' 128-bit counters, so the streams stay out here.)
     #[serde(flatten)]
-    pub own: S,
+    pub loop_state: S,
 }
 
 /// The RL side's state alone: a plain trainer's.
 pub type TrainerState = LearnerState<()>;
 
 impl<S> LearnerState<S> {
-    /// This state with `own` as the learner's own part, and the part it had.
-    pub fn replace_own<T>(self, own: T) -> (LearnerState<T>, S) {
+    /// This state with `loop_state` as its loop's part, and the part it had.
+    pub fn with_loop_state<T>(self, loop_state: T) -> (LearnerState<T>, S) {
         let Self {
             episodes,
             env_steps,
@@ -60,7 +61,7 @@ impl<S> LearnerState<S> {
             agent_updates,
             agent_rng,
             episode_open,
-            own: old,
+            loop_state: old,
         } = self;
         let state = LearnerState {
             episodes,
@@ -69,24 +70,17 @@ impl<S> LearnerState<S> {
             agent_updates,
             agent_rng,
             episode_open,
-            own,
+            loop_state,
         };
         (state, old)
     }
 }
 
-/// A learner trained row by row.
-///
-/// Its full state is three parts: [`Learner::state`] (counters and random streams, small,
-/// serialisable), [`Learner::tensors`] (weights and optimiser moments) and
-/// [`Learner::buffer`] (the replay buffer). Restoring the three into a learner built fresh
-/// from the same configuration continues the run exactly. Learners are `Send`: a training
-/// session steps them inside its thread pool.
-pub trait Learner: Send {
+/// A learner trained row by row. Learners are `Send`: a training session steps them inside
+/// its thread pool; [`Resumable`] is how a session checkpoints them.
+pub trait Learner: Resumable + Send {
     /// One row of the metrics.
     type Row: Row;
-    /// The learner's own counters, beside the RL side's in [`LearnerState`].
-    type Own: Serialize + DeserializeOwned + Clone;
     /// What a row is: `"episode"` or `"generation"`.
     const UNIT: &'static str;
 
@@ -108,9 +102,6 @@ pub trait Learner: Send {
     /// The RL agent.
     fn agent(&self) -> &Agent;
 
-    /// The replay buffer.
-    fn buffer(&self) -> &ReplayBuffer;
-
     /// The agent whose policy scored the last row's learning-curve value, when that is not
     /// [`Learner::agent`] itself (the hybrid loop's best individual); `None` otherwise.
     fn scored_agent(&self) -> Result<Option<Agent>, AgentError> {
@@ -121,22 +112,35 @@ pub trait Learner: Send {
     fn summary_figures(&self) -> Vec<(&'static str, Option<f64>)> {
         Vec::new()
     }
+}
+
+/// A learner's full state, in three parts: [`Resumable::state`] (counters and random
+/// streams, small, serialisable), [`Resumable::tensors`] (weights and optimiser moments) and
+/// [`Resumable::buffer`] (the replay buffer). Restoring the three into a learner built fresh
+/// from the same configuration continues the run exactly.
+pub trait Resumable {
+    /// The loop's counters, beside the RL side's in [`LearnerState`] (`()` for a plain
+    /// trainer).
+    type LoopState: Serialize + DeserializeOwned + Clone;
 
     /// Counters and random streams.
-    fn state(&self) -> LearnerState<Self::Own>;
+    fn state(&self) -> LearnerState<Self::LoopState>;
 
     /// Every tensor: the agent's (networks, targets, optimiser moments, log α) and the
     /// learner's own (the ES mean).
     fn tensors(&self) -> Vec<(String, Vec<f32>)>;
 
+    /// The replay buffer.
+    fn buffer(&self) -> &ReplayBuffer;
+
     /// Checks a saved state against this learner's configuration and the `rows` the
     /// checkpoint covers, before anything is restored; the error names the field.
-    fn check(&self, state: &LearnerState<Self::Own>, rows: usize) -> Result<(), AgentError>;
+    fn check(&self, state: &LearnerState<Self::LoopState>, rows: usize) -> Result<(), AgentError>;
 
     /// Restores a saved state, its tensors and its replay buffer.
     fn restore(
         &mut self,
-        state: LearnerState<Self::Own>,
+        state: LearnerState<Self::LoopState>,
         tensors: &HashMap<String, Vec<f32>>,
         buffer: ReplayBuffer,
     ) -> Result<(), AgentError>;

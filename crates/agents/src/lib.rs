@@ -50,11 +50,11 @@ pub mod rollout;
 mod sac;
 mod td3;
 pub mod train;
-pub mod update;
+mod update;
 
 pub use agent::{Agent, AgentError, UpdateStats};
 pub use config::{Algo, ConfigError, LearnEvery, RlConfig};
-pub use learner::{Learner, LearnerState, Row, TrainerState};
+pub use learner::{Learner, LearnerState, Resumable, Row, TrainerState};
 pub use nets::NetConfig;
 pub use policy::{ActMode, Exploration, Policy};
 pub use replay::{ReplayBuffer, SequenceBatch, Transition};

@@ -4,7 +4,7 @@
 
 use crate::agent::{Agent, AgentError, UpdateStats};
 use crate::config::{LearnEvery, RlConfig};
-use crate::learner::{state_error, Learner, Row, TrainerState};
+use crate::learner::{state_error, Learner, Resumable, Row, TrainerState};
 use crate::policy::{ActMode, Policy};
 use crate::replay::{ReplayBuffer, SequenceBatch, Transition};
 use crate::rollout::{rollout, Actor, Episode};
@@ -307,7 +307,7 @@ impl Trainer {
             agent_updates,
             agent_rng,
             episode_open: self.buffer.episode_open(),
-            own: (),
+            loop_state: (),
         }
     }
 
@@ -382,7 +382,6 @@ impl<E: Env + ?Sized> EpisodeHook<E> for Learning<'_> {
 
 impl Learner for Trainer {
     type Row = EpisodeReport;
-    type Own = ();
     const UNIT: &'static str = "episode";
 
     fn run_row(&mut self, envs: &MakeEnv) -> Result<EpisodeReport, AgentError> {
@@ -401,6 +400,10 @@ impl Learner for Trainer {
     fn agent(&self) -> &Agent {
         &self.agent
     }
+}
+
+impl Resumable for Trainer {
+    type LoopState = ();
 
     fn buffer(&self) -> &ReplayBuffer {
         &self.buffer

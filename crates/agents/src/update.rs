@@ -1,13 +1,13 @@
 //! The gradient update of SAC, TD3 and DDPG ([`Agent::update`]): training and every
 //! benchmark run this code. [`Agent::update`] dispatches on the algorithm to its own
-//! straight-line update, each step under its equation number: [`sac`](crate::sac) (paper
-//! eqs. 3–7) and [`td3`](crate::td3) (DDPG is TD3 with one critic and its tricks off). This
+//! straight-line update, each step under its equation number: `sac.rs` (paper
+//! eqs. 3–7) and `td3.rs` (DDPG is TD3 with one critic and its tricks off). This
 //! module holds what they share:
 //!
-//! - burn-in ([`Agent::parts`]): recurrent networks run the window's first steps without
+//! - burn-in (`Agent::parts`): recurrent networks run the window's first steps without
 //!   gradients, one step at a time so the state can be zeroed where the batch's `reset`
 //!   says, and the trained part is cut into the parts the losses run on
-//!   ([`chunks`](crate::chunks));
+//!   (`chunks.rs`);
 //! - the tail of the TD target (eq. 3, [`soft_target`]): the target critics' minimum and
 //!   the clip;
 //! - the critic loss and one Adam step per critic (eq. 4, [`train_critics`]);
@@ -83,7 +83,7 @@ fn apply_resets(state: &mut Option<LstmState>, reset: &[bool]) {
 }
 
 impl Agent {
-    /// One gradient update on `batch`: the algorithm's ([`sac::update`], [`td3::update`]).
+    /// One gradient update on `batch`: the algorithm's (`sac.rs`, or `td3.rs` for TD3 and DDPG).
     pub fn update(&mut self, batch: &SequenceBatch) -> Result<UpdateStats, AgentError> {
         match self.algo {
             Algo::Sac => sac::update(self, batch),

@@ -45,7 +45,7 @@
 
 use crate::evaluate::{Evaluation, Evaluator, Generation, Genome, RolloutSpec};
 use crate::strategy::{rank, EsConfig, Fitness, LoopOrder, Strategy};
-use esrl_agents::learner::{Learner, LearnerState, Row};
+use esrl_agents::learner::{Learner, LearnerState, Resumable, Row};
 use esrl_agents::{ActMode, Agent, AgentError, LossMeans, ReplayBuffer, Trainer};
 use esrl_sim::MakeEnv;
 use esrl_streams::Stream;
@@ -589,7 +589,6 @@ impl Hybrid {
 
 impl Learner for Hybrid {
     type Row = GenerationReport;
-    type Own = EsState;
     const UNIT: &'static str = "generation";
 
     /// The warm start, from one environment of `envs`.
@@ -616,10 +615,6 @@ impl Learner for Hybrid {
         self.trainer.agent()
     }
 
-    fn buffer(&self) -> &ReplayBuffer {
-        self.trainer.buffer()
-    }
-
     /// The agent with the actor (and, for ES-SAC, log α) of the last generation's best
     /// individual ([`Hybrid::kept`]).
     fn scored_agent(&self) -> Result<Option<Agent>, AgentError> {
@@ -638,6 +633,14 @@ impl Learner for Hybrid {
             ("rl_replaced_share", self.stats.replaced_share()),
         ]
     }
+}
+
+impl Resumable for Hybrid {
+    type LoopState = EsState;
+
+    fn buffer(&self) -> &ReplayBuffer {
+        self.trainer.buffer()
+    }
 
     fn state(&self) -> LearnerState<EsState> {
         let es = EsState {
@@ -647,7 +650,7 @@ impl Learner for Hybrid {
             rl_trained: Some(self.rl_trained),
             loop_stats: Some(self.stats.clone()),
         };
-        self.trainer.state().replace_own(es).0
+        self.trainer.state().with_loop_state(es).0
     }
 
     fn tensors(&self) -> Vec<(String, Vec<f32>)> {
@@ -659,7 +662,7 @@ impl Learner for Hybrid {
     /// Refuses a state whose generation count is not `rows`, whose σ lies outside the range
     /// eq. 11 keeps it in, or whose ES generation counter disagrees.
     fn check(&self, state: &LearnerState<EsState>, rows: usize) -> Result<(), AgentError> {
-        let state = &state.own;
+        let state = &state.loop_state;
         let bad = |field: &str, reason: String| {
             Err(AgentError::State {
                 field: field.into(),
@@ -718,7 +721,7 @@ impl Learner for Hybrid {
                 ),
             });
         }
-        let (rl, state) = state.replace_own(());
+        let (rl, state) = state.with_loop_state(());
         self.trainer.restore(rl, tensors, buffer)?;
         self.strategy.mean.clone_from(mean);
         self.strategy.sigma = state.sigma.unwrap_or(self.strategy.sigma);

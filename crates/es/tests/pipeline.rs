@@ -8,7 +8,7 @@
 mod common;
 
 use common::{envs, hybrid_with};
-use esrl_agents::{Algo, Learner};
+use esrl_agents::{Algo, Resumable};
 use esrl_es::{EsConfig, Evaluation, Evaluator, Generation, LocalEvaluator};
 use std::sync::{Arc, Mutex};
 

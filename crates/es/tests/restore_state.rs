@@ -6,7 +6,7 @@
 mod common;
 
 use common::hybrid;
-use esrl_agents::{Algo, Learner, LearnerState};
+use esrl_agents::{Algo, Learner, LearnerState, Resumable};
 use esrl_es::{EsConfig, EsState};
 use std::collections::HashMap;
 

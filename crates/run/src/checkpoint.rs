@@ -29,10 +29,10 @@
 //! keep `RUN/best/` ([`save_best`]): the policy with the highest learning-curve value so
 //! far, for `esrl eval RUN/best`.
 //!
-//! Everything a checkpoint holds comes through the [`Learner`] interface: its counters and
-//! streams ([`Learner::state`], the learner's keys of `state.json` beside the run's own
-//! [`RunState`]), its tensors ([`Learner::tensors`]) and its replay buffer; resuming checks
-//! them ([`Learner::check`]) and hands them back ([`Learner::restore`]) to a learner built
+//! Everything a checkpoint holds comes through the learner's [`esrl_agents::Resumable`] interface: its counters and
+//! streams ([`Resumable::state`](esrl_agents::Resumable::state), the learner's keys of `state.json` beside the run's own
+//! [`RunState`]), its tensors ([`Resumable::tensors`](esrl_agents::Resumable::tensors)) and its replay buffer; resuming checks
+//! them ([`Resumable::check`](esrl_agents::Resumable::check)) and hands them back ([`Resumable::restore`](esrl_agents::Resumable::restore)) to a learner built
 //! fresh from the run's config.
 //!
 //! A checkpoint is written to `checkpoint.tmp/`, then swapped in with two renames; a kill at
@@ -59,7 +59,7 @@ use std::path::{Path, PathBuf};
 pub const STATE_VERSION: u32 = 2;
 
 /// The run's own part of `state.json`: how far it is, and the replay chunks its buffer is
-/// made of. The learner's counters and streams ([`Learner::State`]) are the file's other keys.
+/// made of. The learner's counters and streams ([`esrl_agents::LearnerState`]) are the file's other keys.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RunState {
     /// Format version ([`STATE_VERSION`]).
@@ -547,7 +547,7 @@ pub fn check_state<L: Learner>(
     dir: &Path,
     learner: &L,
     state: &RunState,
-    learner_state: &LearnerState<L::Own>,
+    learner_state: &LearnerState<L::LoopState>,
 ) -> Result<()> {
     let p = dir.join("state.json");
     let bad = |field: &str, why: String| -> Result<()> {
@@ -756,7 +756,7 @@ pub fn restore<L: Learner>(
     dir: &Path,
     learner: &mut L,
     state: &RunState,
-    learner_state: LearnerState<L::Own>,
+    learner_state: LearnerState<L::LoopState>,
 ) -> Result<()> {
     let tensors = read_tensors(dir)?;
     let buffer = read_buffer(dir, state, learner.agent(), learner_state.episode_open)?;

@@ -6,7 +6,7 @@
 //! - [`build`]: the one place that loads the URDF and builds the environments, the agent
 //!   and the learner ([`AnyLearner`]: a plain [`esrl_agents::Trainer`] or an
 //!   [`esrl_es::Hybrid`]) of a config.
-//! - [`plan`]: a `train` command's arguments ([`TrainRequest`]) turned into a configuration
+//! - [`plan`](mod@plan): a `train` command's arguments ([`TrainRequest`]) turned into a configuration
 //!   and a folder, new or resumed, for every front end.
 //! - [`training`]: [`Training`] drives any [`esrl_agents::Learner`] row by row into its
 //!   folder: metrics, summary, `RUN/best/`, checkpoints; [`session`]: [`Session`], the

@@ -151,7 +151,7 @@ impl<L: Learner> Training<L> {
         let mut state = RunState::fresh();
         let (run, opening) = match (resume, checkpoint::find(root)) {
             (true, Some(dir)) => {
-                let (run_state, learner_state) = checkpoint::load_state::<L::Own>(&dir)?;
+                let (run_state, learner_state) = checkpoint::load_state::<L::LoopState>(&dir)?;
                 checkpoint::check_config(&dir, &run_state, cfg)?;
                 checkpoint::check_state(root, &dir, &learner, &run_state, &learner_state)?;
                 let env_steps = learner_state.env_steps;

@@ -4,7 +4,9 @@
 //! Without a check the same rows keep the later one, so the test can tell the two rules
 //! apart.
 
-use esrl_agents::{Agent, AgentError, EpisodeReport, Learner, ReplayBuffer, Trainer, TrainerState};
+use esrl_agents::{
+    Agent, AgentError, EpisodeReport, Learner, ReplayBuffer, Resumable, Trainer, TrainerState,
+};
 use esrl_run::check::{CheckConfig, CheckRecord};
 use esrl_run::checkpoint::{BestInfo, BEST, BEST_INFO};
 use esrl_run::training::CHECKS_FILE;
@@ -22,7 +24,6 @@ struct Scripted {
 
 impl Learner for Scripted {
     type Row = EpisodeReport;
-    type Own = ();
     const UNIT: &'static str = "episode";
 
     fn run_row(&mut self, _envs: &MakeEnv) -> Result<EpisodeReport, AgentError> {
@@ -55,14 +56,18 @@ impl Learner for Scripted {
         self.inner.agent()
     }
 
-    fn buffer(&self) -> &ReplayBuffer {
-        self.inner.buffer()
-    }
-
     fn scored_agent(&self) -> Result<Option<Agent>, AgentError> {
         let mut agent = self.inner.agent().clone();
         agent.set_genome(&self.rows[self.done - 1].1)?;
         Ok(Some(agent))
+    }
+}
+
+impl Resumable for Scripted {
+    type LoopState = ();
+
+    fn buffer(&self) -> &ReplayBuffer {
+        self.inner.buffer()
     }
 
     fn state(&self) -> TrainerState {
