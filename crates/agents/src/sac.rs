@@ -8,8 +8,8 @@
 use crate::agent::{Agent, AgentError, UpdateStats};
 use crate::chunks::{self, ActorPass, Part};
 use crate::replay::SequenceBatch;
-use crate::update::{polyak, soft_target, train_critics};
-use esrl_nn::{Actor, Graph, Module, Tensor};
+use crate::update::{polyak, soft_target, step_actor, train_critics};
+use esrl_nn::{Actor, Graph, Tensor};
 
 /// One SAC update on `batch`.
 ///
@@ -51,14 +51,7 @@ pub(crate) fn update(agent: &mut Agent, batch: &SequenceBatch) -> Result<UpdateS
         },
         || polyak(&mut agent.critic_targets, critics, tau),
     );
-    let (loss, mut grad, log_probs) = chunks::sum_actor_parts(losses)?;
-    if !loss.is_finite() {
-        return Err(AgentError::NonFinite {
-            what: "actor loss",
-            update: agent.updates,
-        });
-    }
-    agent.opt_actor.step(agent.actor.params_mut(), &mut grad)?;
+    let (loss, log_probs) = step_actor(agent, losses)?;
     train_alpha(agent, &log_probs, &parts)?;
     targets?;
     agent.updates += 1;

@@ -9,7 +9,7 @@
 use crate::agent::{Agent, AgentError, Smoothing, UpdateStats};
 use crate::chunks::{self, ActorPass, Part};
 use crate::replay::SequenceBatch;
-use crate::update::{polyak, soft_target, train_critics};
+use crate::update::{polyak, soft_target, step_actor, train_critics};
 use esrl_nn::{Actor, Graph, Module, Tensor};
 
 /// One TD3/DDPG update on `batch`.
@@ -58,14 +58,7 @@ pub(crate) fn update(agent: &mut Agent, batch: &SequenceBatch) -> Result<UpdateS
             },
             || polyak(&mut agent.critic_targets, critics, tau),
         );
-        let (loss, mut grad, _) = chunks::sum_actor_parts(losses)?;
-        if !loss.is_finite() {
-            return Err(AgentError::NonFinite {
-                what: "actor loss",
-                update: agent.updates,
-            });
-        }
-        agent.opt_actor.step(agent.actor.params_mut(), &mut grad)?;
+        let (loss, _) = step_actor(agent, losses)?;
         targets?;
         // Eq. 7 for the target actor.
         let target = agent

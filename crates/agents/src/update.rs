@@ -381,6 +381,24 @@ pub(crate) fn train_critics(
     Ok((f64::from(loss), f64::from(q_mean)))
 }
 
+/// The actor's Adam step on its loss: the parts' losses and gradients summed in part order
+/// ([`chunks::sum_actor_parts`]), a non-finite loss refused. Returns the loss and (SAC) the
+/// samples' log π, part by part.
+pub(crate) fn step_actor(
+    agent: &mut Agent,
+    losses: Vec<chunks::ActorPart>,
+) -> Result<(f32, Vec<Tensor>), AgentError> {
+    let (loss, mut grad, log_probs) = chunks::sum_actor_parts(losses)?;
+    if !loss.is_finite() {
+        return Err(AgentError::NonFinite {
+            what: "actor loss",
+            update: agent.updates,
+        });
+    }
+    agent.opt_actor.step(agent.actor.params_mut(), &mut grad)?;
+    Ok((loss, log_probs))
+}
+
 /// Eq. 7 for the target critics: θ̄ ← τθ + (1 − τ)θ̄, one target after the other.
 pub(crate) fn polyak(
     targets: &mut [Critic],

@@ -166,22 +166,21 @@ impl LoopStats {
 }
 
 /// The hybrid loop's own counters, beside the RL side's in `state.json`
-/// ([`LearnerState<EsState>`](LearnerState)).
+/// ([`LearnerState<EsState>`](LearnerState)). Checkpoints of earlier versions load through
+/// `compat.rs`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "crate::compat::EsStateFile")]
 pub struct EsState {
     /// Generations completed.
     pub generations: usize,
     /// ES σ.
-    pub sigma: Option<f64>,
+    pub sigma: f64,
     /// The ES distribution's generation counter.
-    pub es_generation: Option<u64>,
-    /// Whether the RL actor carries inner updates not yet evaluated. Absent in checkpoints
-    /// written before this field existed: then true after generation 0 with inner cycles.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rl_trained: Option<bool>,
-    /// The loop's counts so far (absent in older checkpoints).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub loop_stats: Option<LoopStats>,
+    pub es_generation: u64,
+    /// Whether the RL actor carries inner updates not yet evaluated.
+    pub rl_trained: bool,
+    /// The loop's counts so far.
+    pub loop_stats: LoopStats,
 }
 
 /// The hybrid learner: an RL trainer (agent + buffer), the ES distribution, and the
@@ -645,10 +644,10 @@ impl Resumable for Hybrid {
     fn state(&self) -> LearnerState<EsState> {
         let es = EsState {
             generations: self.generation,
-            sigma: Some(self.strategy.sigma),
-            es_generation: Some(self.strategy.generation),
-            rl_trained: Some(self.rl_trained),
-            loop_stats: Some(self.stats.clone()),
+            sigma: self.strategy.sigma,
+            es_generation: self.strategy.generation,
+            rl_trained: self.rl_trained,
+            loop_stats: self.stats.clone(),
         };
         self.trainer.state().with_loop_state(es).0
     }
@@ -675,9 +674,7 @@ impl Resumable for Hybrid {
                 format!("= {} but rows = {rows}", state.generations),
             );
         }
-        let Some(sigma) = state.sigma else {
-            return bad("sigma", "is missing for an ES run".into());
-        };
+        let sigma = state.sigma;
         let (lo, hi) = (
             self.es.sigma.min(self.es.sigma_min),
             self.es.sigma.max(self.es.sigma_min),
@@ -688,11 +685,11 @@ impl Resumable for Hybrid {
                 format!("= {sigma}, outside [{lo}, {hi}] where eq. 11 keeps it"),
             );
         }
-        if state.es_generation != Some(state.generations as u64) {
+        if state.es_generation != state.generations as u64 {
             return bad(
                 "es_generation",
                 format!(
-                    "= {:?} but generations = {}",
+                    "= {} but generations = {}",
                     state.es_generation, state.generations
                 ),
             );
@@ -724,13 +721,13 @@ impl Resumable for Hybrid {
         let (rl, state) = state.with_loop_state(());
         self.trainer.restore(rl, tensors, buffer)?;
         self.strategy.mean.clone_from(mean);
-        self.strategy.sigma = state.sigma.unwrap_or(self.strategy.sigma);
-        self.strategy.generation = state.es_generation.unwrap_or(0);
+        self.strategy.sigma = state.sigma;
+        self.strategy.generation = state.es_generation;
         self.generation = state.generations;
-        self.rl_trained = state
-            .rl_trained
-            .unwrap_or(self.generation > 0 && self.inner_cycles > 0);
-        self.stats = state.loop_stats.unwrap_or_default();
+        // A loop without inner training never carries a trained actor.
+        self.rl_trained =
+            state.rl_trained && (self.inner_cycles > 0 || self.updates_per_step.is_some());
+        self.stats = state.loop_stats;
         Ok(())
     }
 }

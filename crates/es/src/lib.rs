@@ -52,6 +52,7 @@
 //! - Fitness is the mean return of K rollouts (K = 1 by default): noisy for stochastic
 //!   policies, which `es.fitness` lets one trade against the buffer's exploratory data.
 
+mod compat;
 pub mod evaluate;
 pub mod hybrid;
 pub mod remote;
