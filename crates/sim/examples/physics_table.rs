@@ -9,12 +9,12 @@
 //! `cargo run --release -p esrl-sim --example physics_table` runs the documented rows;
 //! `-- MODEL SUBSTEPS ITERATIONS [BAND_DEGREES]` (e.g. `-- fade 4 1 1`) runs one.
 
-use std::sync::Arc;
+// The fixtures of the physics tests (the humanoid held in the air).
+#[path = "../tests/common/mod.rs"]
+mod common;
 
 use esrl_sim::bench::bench_walk;
-use esrl_sim::{
-    Base, Env, LimitModel, RobotModel, RobotSim, RobotState, SimSetup, WalkConfig, WalkEnv,
-};
+use esrl_sim::{Env, LimitModel, RobotSim, RobotState, WalkConfig, WalkEnv};
 
 fn config(model: LimitModel, substeps: u32, iterations: u32) -> WalkConfig {
     let mut c = WalkConfig::default();
@@ -50,26 +50,12 @@ fn standing(config: WalkConfig) -> Option<f32> {
 /// per control period), degrees, of the actuated joints driven at full effort through
 /// full-range swings with the torso held in the air (the scenario of `tests/joint_limits.rs`).
 fn limits(config: WalkConfig) -> (f64, f64, f64) {
-    let model = Arc::new(RobotModel::humanoid().unwrap());
-    let actuated: Vec<usize> = config
-        .actuated_joints
-        .iter()
-        .map(|n| model.joint_index(n).unwrap())
-        .collect();
-    let mut armature = vec![0.0; model.joints().len()];
+    let (model, actuated, setup) = common::held_humanoid(&config);
     let mut q = vec![0.0; model.joints().len()];
     for &j in &actuated {
-        armature[j] = config.physics.actuator_armature;
         let [lo, hi] = model.joints()[j].limits.unwrap();
         q[j] = 0.5 * (lo + hi);
     }
-    let setup = SimSetup {
-        dt: config.control_period / config.physics.substeps as f32,
-        physics: config.physics.clone(),
-        base: Base::Fixed,
-        ground: false,
-        armature,
-    };
     let state = RobotState {
         base_position: [0.0, 0.0, 1.5],
         q,

@@ -10,38 +10,26 @@
 //! - servos in a state that blows up to NaN within a step do not panic it (Rapier's motor
 //!   clamps with the joint position): the world is marked broken and reads NaN.
 
+mod common;
+
+use common::{I_COM, L, M};
 use std::sync::Arc;
 
 use esrl_sim::{Base, LimitModel, PhysicsConfig, RobotModel, RobotSim, RobotState, SimSetup};
 
-const M: f64 = 1.5;
-const L: f64 = 0.8;
-const I_COM: f64 = 0.004;
 /// Upper limit of the hinge, rad.
 const HI: f64 = 0.5;
 /// Joint damping, N·m·s/rad.
 const DAMPING: f64 = 2.0;
 
 fn urdf() -> String {
-    format!(
-        r#"<robot name="pendulum">
-  <link name="world"/>
-  <link name="bob">
-    <inertial>
-      <origin xyz="0 0 -{L}" rpy="0 0 0"/>
-      <mass value="{M}"/>
-      <inertia ixx="{I_COM}" ixy="0" ixz="0" iyy="{I_COM}" iyz="0" izz="{I_COM}"/>
-    </inertial>
-  </link>
-  <joint name="hinge" type="revolute">
-    <origin xyz="0 0 2" rpy="0 0 0"/>
-    <parent link="world"/>
-    <child link="bob"/>
-    <axis xyz="0 1 0"/>
-    <limit lower="-2.5" upper="{HI}" effort="50" velocity="30"/>
-    <dynamics damping="{DAMPING}"/>
-  </joint>
-</robot>"#
+    common::pendulum_urdf(
+        "revolute",
+        &format!(
+            "\n    <limit lower=\"-2.5\" upper=\"{HI}\" effort=\"50\" velocity=\"30\"/>\n    \
+             <dynamics damping=\"{DAMPING}\"/>"
+        ),
+        false,
     )
 }
 

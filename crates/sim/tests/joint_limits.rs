@@ -11,30 +11,14 @@
 //! (`fade` limits take that torque away near the limit). The crate docs list the measured
 //! values, the transient peaks between control steps included.
 
-use std::sync::Arc;
+mod common;
 
-use esrl_sim::{Base, RobotModel, RobotSim, RobotState, SimSetup, WalkConfig};
+use esrl_sim::{RobotSim, RobotState, WalkConfig};
 
 #[test]
 fn actuated_joints_hold_their_limits_at_full_effort() {
     let config = WalkConfig::default();
-    let model = Arc::new(RobotModel::humanoid().unwrap());
-    let actuated: Vec<usize> = config
-        .actuated_joints
-        .iter()
-        .map(|n| model.joint_index(n).unwrap())
-        .collect();
-    let mut armature = vec![0.0; model.joints().len()];
-    for &j in &actuated {
-        armature[j] = config.physics.actuator_armature;
-    }
-    let setup = SimSetup {
-        dt: config.control_period / config.physics.substeps as f32,
-        physics: config.physics.clone(),
-        base: Base::Fixed,
-        ground: false,
-        armature,
-    };
+    let (model, actuated, setup) = common::held_humanoid(&config);
     let mut q = vec![0.0; model.joints().len()];
     for &j in &actuated {
         let [lo, hi] = model.joints()[j].limits.unwrap();

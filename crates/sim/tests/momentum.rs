@@ -11,31 +11,16 @@
 //!   motion Rapier's first-order multibody integrator drifts more (crate docs, "Known
 //!   limitations").
 
+mod common;
+
 use std::sync::Arc;
 
 use esrl_sim::{Base, PhysicsConfig, RobotModel, RobotSim, RobotState, SimSetup};
 
 #[test]
 fn a_spinning_root_with_an_offset_centre_of_mass_conserves_momentum() {
-    let urdf = r#"<robot name="two">
-      <link name="a"><inertial><origin xyz="0 0 0.3"/><mass value="2"/>
-        <inertia ixx="0.2" ixy="0" ixz="0" iyy="0.3" iyz="0" izz="0.4"/></inertial></link>
-      <link name="b"><inertial><origin xyz="0 0 -0.5"/><mass value="1"/>
-        <inertia ixx="0.05" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.05"/></inertial></link>
-      <joint name="j" type="continuous"><parent link="a"/><child link="b"/><axis xyz="0 1 0"/></joint>
-    </robot>"#;
-    let model = Arc::new(RobotModel::from_urdf_str(urdf).unwrap());
-    let setup = SimSetup {
-        dt: 0.01,
-        physics: PhysicsConfig {
-            gravity: 0.0,
-            solver_iterations: 1,
-            ..PhysicsConfig::default()
-        },
-        base: Base::Floating,
-        ground: false,
-        armature: vec![],
-    };
+    let model = Arc::new(RobotModel::from_urdf_str(&common::two_bodies_urdf(0.3)).unwrap());
+    let setup = common::weightless(0.01);
     let state = RobotState {
         base_position: [0.0, 0.0, 1.0],
         q: vec![0.0],

@@ -5,35 +5,15 @@
 //! relative acceleration `τ(1/I₁ + 1/I₂')` that rigid-body mechanics gives, so the torque
 //! pair acts on the joint alone.
 
+mod common;
+
+use common::{I_COM, L, M};
 use std::sync::Arc;
 
 use esrl_sim::{Base, PhysicsConfig, RobotModel, RobotSim, RobotState, SimSetup};
 
-/// Bob of 1.5 kg at l = 0.8 m below the pivot, with a small sphere-like inertia about its COM.
-const M: f64 = 1.5;
-const L: f64 = 0.8;
-const I_COM: f64 = 0.004;
-
 fn pendulum_urdf() -> String {
-    format!(
-        r#"<robot name="pendulum">
-  <link name="world"/>
-  <link name="bob">
-    <inertial>
-      <origin xyz="0 0 -{L}" rpy="0 0 0"/>
-      <mass value="{M}"/>
-      <inertia ixx="{I_COM}" ixy="0" ixz="0" iyy="{I_COM}" iyz="0" izz="{I_COM}"/>
-    </inertial>
-    <collision><origin xyz="0 0 -{L}"/><geometry><sphere radius="0.05"/></geometry></collision>
-  </link>
-  <joint name="hinge" type="continuous">
-    <origin xyz="0 0 2" rpy="0 0 0"/>
-    <parent link="world"/>
-    <child link="bob"/>
-    <axis xyz="0 1 0"/>
-  </joint>
-</robot>"#
-    )
+    common::pendulum_urdf("continuous", "", true)
 }
 
 /// Moment of inertia about the pivot (parallel-axis theorem).
@@ -133,25 +113,8 @@ fn torque_pair_between_free_bodies_acts_on_the_joint_only() {
     // Body a (pivot at its COM) and body b (COM 0.5 m below the pivot), floating, no gravity.
     // Rigid-body mechanics: a spins with −τ/I_a (the pin force has no moment about a's COM);
     // b spins with τ/(I_b + μ l²), μ = m_a m_b/(m_a + m_b) the reduced mass.
-    let urdf = r#"<robot name="two">
-      <link name="a"><inertial><mass value="2"/>
-        <inertia ixx="0.2" ixy="0" ixz="0" iyy="0.3" iyz="0" izz="0.4"/></inertial></link>
-      <link name="b"><inertial><origin xyz="0 0 -0.5"/><mass value="1"/>
-        <inertia ixx="0.05" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.05"/></inertial></link>
-      <joint name="j" type="continuous"><parent link="a"/><child link="b"/><axis xyz="0 1 0"/></joint>
-    </robot>"#;
-    let model = Arc::new(RobotModel::from_urdf_str(urdf).unwrap());
-    let setup = SimSetup {
-        dt: 0.001,
-        physics: PhysicsConfig {
-            gravity: 0.0,
-            solver_iterations: 1,
-            ..PhysicsConfig::default()
-        },
-        base: Base::Floating,
-        ground: false,
-        armature: vec![],
-    };
+    let model = Arc::new(RobotModel::from_urdf_str(&common::two_bodies_urdf(0.0)).unwrap());
+    let setup = common::weightless(0.001);
     let state = RobotState {
         base_position: [0.0, 0.0, 1.0],
         q: vec![0.0],

@@ -8,11 +8,9 @@
 // Index loops read like the vector formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use std::sync::Arc;
+mod common;
 
-use esrl_sim::{
-    ActionMode, Base, Env, RobotModel, RobotSim, RobotState, SimSetup, WalkConfig, WalkEnv,
-};
+use esrl_sim::{ActionMode, Env, RobotSim, RobotState, WalkConfig, WalkEnv};
 
 fn config() -> WalkConfig {
     WalkConfig {
@@ -84,26 +82,12 @@ fn a_zero_action_holds_the_standing_pose_for_20_s() {
 fn a_target_step_is_reached_within_2_degrees_in_the_documented_time() {
     let config = config();
     let env = WalkEnv::new(config.clone()).unwrap();
-    let model = Arc::new(RobotModel::humanoid().unwrap());
-    let actuated: Vec<usize> = config
-        .actuated_joints
-        .iter()
-        .map(|n| model.joint_index(n).unwrap())
-        .collect();
+    let (model, actuated, setup) = common::held_humanoid(&config);
     let stand = env.standing_pose();
-    let mut armature = vec![0.0; model.joints().len()];
     let mut q = vec![0.0; model.joints().len()];
     for (k, &j) in actuated.iter().enumerate() {
-        armature[j] = config.physics.actuator_armature;
         q[j] = stand[k] as f64;
     }
-    let setup = SimSetup {
-        dt: config.control_period / config.physics.substeps as f32,
-        physics: config.physics.clone(),
-        base: Base::Fixed,
-        ground: false,
-        armature,
-    };
     let (kp, kd) = (config.target.stiffness, config.target.damping);
     // (joint, documented time to stay within 2°, s)
     for (k, limit_s) in [(0, 0.6), (1, 0.15), (2, 0.15)] {
