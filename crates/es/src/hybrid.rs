@@ -305,7 +305,7 @@ impl Hybrid {
     }
 
     /// The inner training cycles of a generation that collected `steps` environment steps.
-    fn cycles(&self, steps: usize) -> usize {
+    fn inner_cycles_for(&self, steps: usize) -> usize {
         match self.updates_per_step {
             Some(ratio) => (ratio * steps as f64).round() as usize,
             None => self.inner_cycles,
@@ -489,10 +489,10 @@ impl Hybrid {
                 if replaced {
                     self.trainer.agent_mut().set_genome(&genomes[best].params)?;
                 }
-                self.train(self.cycles(steps), prefetch)?
+                self.train(self.inner_cycles_for(steps), prefetch)?
             }
             LoopOrder::TrainThenReplace => {
-                let losses = self.train(self.cycles(steps), prefetch)?;
+                let losses = self.train(self.inner_cycles_for(steps), prefetch)?;
                 if replaced {
                     self.trainer.agent_mut().set_genome(&genomes[best].params)?;
                 }

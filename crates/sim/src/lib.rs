@@ -264,5 +264,5 @@ pub use pendulum::Pendulum;
 pub use sim::{Base, LimitModel, PhysicsConfig, RobotSim, RobotState, SimSetup};
 pub use walk::{
     ActionMode, FallConfig, GaitClock, InitNoise, Mirror, ObsLayout, Perturb, PushDirection,
-    ResetConfig, ResetPose, RewardConfig, TargetGains, UprightGate, WalkConfig, WalkEnv,
+    ResetConfig, ResetPose, RewardConfig, TargetServo, UprightGate, WalkConfig, WalkEnv,
 };

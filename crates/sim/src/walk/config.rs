@@ -175,10 +175,11 @@ pub enum ActionMode {
     Target,
 }
 
-/// Gains of the `target` action mode's servos ([`WalkConfig::target`]).
+/// The `target` action mode's servos ([`WalkConfig::target`]): their gains and the span of
+/// the targets the actions address.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
-pub struct TargetGains {
+pub struct TargetServo {
     /// Stiffness `kp`, N·m/rad, every actuated joint. Default 1500 (module docs, "Action":
     /// above the ≈ 620 N·m/rad the ankles need to hold the 70 kg body upright, and full
     /// effort at 5.7° of error).
@@ -193,7 +194,7 @@ pub struct TargetGains {
     pub range: Option<f32>,
 }
 
-impl Default for TargetGains {
+impl Default for TargetServo {
     fn default() -> Self {
         Self {
             stiffness: 1500.0,
@@ -500,8 +501,8 @@ pub struct WalkConfig {
     pub reset: ResetConfig,
     /// How actions drive the joints: `torque` or `target`. Default `torque` (paper §5).
     pub action: ActionMode,
-    /// Servo gains of the `target` action mode.
-    pub target: TargetGains,
+    /// The servos of the `target` action mode: gains and target span.
+    pub target: TargetServo,
     /// Optional gait clock: phase features at the end of the observation and a reward for
     /// contacts that follow them ([`GaitClock`]). Default none (the paper's observation and
     /// reward).
@@ -548,7 +549,7 @@ impl Default for WalkConfig {
             init_noise: InitNoise::default(),
             reset: ResetConfig::default(),
             action: ActionMode::Torque,
-            target: TargetGains::default(),
+            target: TargetServo::default(),
             gait_clock: None,
             normalize_obs: true,
             actuated_joints: [

@@ -60,7 +60,7 @@
 //!   humanoid walker drives its joints through PD set-points. The map is piecewise linear
 //!   through the standing pose: `q* = q_stand + a·(hi − q_stand)` for `a ≥ 0`,
 //!   `q_stand + a·(q_stand − lo)` for `a < 0` ([`WalkEnv::target_angle`]), so a zero action
-//!   holds the standing pose and ±1 reach the limits. Gains ([`TargetGains`]): `kp` = 1500
+//!   holds the standing pose and ±1 reach the limits. Gains ([`TargetServo`]): `kp` = 1500
 //!   N·m/rad, `kd` = 60 N·m·s/rad on every actuated joint, measured: the ankles need more than
 //!   the ≈ 620 N·m/rad of `m·g·h` to hold the 70 kg body upright, and with these gains a zero
 //!   action stands 20 s from every reset seed tried (torso within 3 cm, joints within 1.2°;
@@ -151,7 +151,7 @@ use rapier3d::prelude::Vector;
 
 pub use config::{
     ActionMode, FallConfig, GaitClock, InitNoise, Perturb, PushDirection, ResetConfig, ResetPose,
-    RewardConfig, TargetGains, UprightGate, WalkConfig,
+    RewardConfig, TargetServo, UprightGate, WalkConfig,
 };
 pub use mirror::Mirror;
 pub use observation::ObsLayout;
@@ -446,7 +446,7 @@ impl WalkEnv {
 
     /// The joint angle target of actuated joint `k` for action `a` in `target` mode (module
     /// docs, "Action"): the standing angle at 0, the joint's limits at ±1, linear in between
-    /// on each side; with [`TargetGains::range`], `q_stand + a·range` clamped to the limits.
+    /// on each side; with [`TargetServo::range`], `q_stand + a·range` clamped to the limits.
     pub fn target_angle(&self, k: usize, a: f32) -> f32 {
         let s = &self.shared;
         let stand = s.standing_q[s.actuated[k]] as f32;
