@@ -305,19 +305,24 @@ impl PyDriver {
     }
 
     /// Runs one row (a generation, or an episode of a plain agent) with the interpreter
-    /// released and writes it; returns `{"rows", "curve", "best", "summary"}`.
+    /// released and writes it; returns `{"rows", "curve", "best", "summary", "estimate"}`,
+    /// `estimate` the line on the time left (`esrl train`'s) on the row that first gives a
+    /// pace, else `None`.
     fn step<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let row = py
-            .detach(|| -> PyResult<esrl_run::Result<esrl_run::RowDone>> {
-                let mut session = self.session()?;
-                Ok(session.step())
-            })?
+        let (row, unit) = py
+            .detach(
+                || -> PyResult<esrl_run::Result<(esrl_run::RowDone, &str)>> {
+                    let mut session = self.session()?;
+                    Ok(session.step().map(|row| (row, session.unit())))
+                },
+            )?
             .map_err(run_error)?;
         let d = PyDict::new(py);
         d.set_item("rows", row.rows)?;
         d.set_item("curve", row.curve)?;
         d.set_item("best", row.best)?;
         d.set_item("summary", row.summary)?;
+        d.set_item("estimate", row.estimate.map(|e| e.describe(unit)))?;
         Ok(d)
     }
 

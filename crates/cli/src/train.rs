@@ -5,6 +5,7 @@
 use crate::args::{EnvKind, TrainArgs};
 use crate::signals;
 use anyhow::Result;
+use esrl_run::human_duration;
 use esrl_run::{build, Opening, Session, TrainConfig, TrainRequest};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
@@ -102,16 +103,6 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
     )
 }
 
-/// "1 h 05 min", "4 min 10 s", "12 s".
-pub fn human_duration(seconds: f64) -> String {
-    let s = seconds.max(0.0).round() as u64;
-    match s {
-        0..=59 => format!("{s} s"),
-        60..=3599 => format!("{} min {:02} s", s / 60, s % 60),
-        _ => format!("{} h {:02} min", s / 3600, (s % 3600) / 60),
-    }
-}
-
 /// Trains `cfg` into `root` (a new folder, or an existing one when `resume`). Returns
 /// whether the budget was completed (false when a stop signal ended it early, after a
 /// checkpoint).
@@ -144,10 +135,7 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
     let bar = progress_bar(total, training.rows(), display);
     let log = display.verbose() && bar.is_hidden();
     let mut last_log = Instant::now();
-    let started = Instant::now();
     let rows_at_start = training.rows();
-    let steps_at_start = training.env_steps();
-    let mut eta_told = false;
     let mut finished = false;
     loop {
         if training.done() {
@@ -166,38 +154,9 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
         };
         bar.set_position(row.rows as u64);
         bar.set_message(format!("{} | best so far {:.1}", row.summary, row.best));
-        let elapsed = started.elapsed().as_secs_f64();
         let measured = row.rows - rows_at_start;
-        // The first rows are no guide (a plain agent's warm start does no updates; a
-        // smoke run ends at once): estimate from at least 10 s of training.
-        if !eta_told && display.verbose() && measured >= 3 && elapsed >= 10.0 {
-            eta_told = true;
-            let left = total.saturating_sub(row.rows);
-            let pace = elapsed / measured as f64;
-            let by_rows = pace * left as f64;
-            let steps_now = training.env_steps();
-            // A step budget ends the run first when the steps left take less time than
-            // the rows left, at the step rate measured so far.
-            let by_steps = cfg.max_env_steps.and_then(|b| {
-                let rate = steps_now.saturating_sub(steps_at_start) as f64 / elapsed;
-                let steps_left = b.saturating_sub(steps_now);
-                let secs = steps_left as f64 / rate;
-                (rate > 0.0 && secs < by_rows).then_some((secs, steps_left, rate))
-            });
-            let text = match by_steps {
-                Some((secs, steps_left, rate)) => format!(
-                    "pace: {rate:.0} env steps/s over the first {measured} {unit}s: about \
-                     {} for the {steps_left} env steps left of the step budget (episodes \
-                     lengthen as the policy learns to stay up; the step rate varies less)",
-                    human_duration(secs)
-                ),
-                None => format!(
-                    "pace: {pace:.1} s per {unit} over the first {measured}: about {} for \
-                     the {left} left (episodes lengthen as the policy learns to stay up, so \
-                     likely more)",
-                    human_duration(by_rows)
-                ),
-            };
+        if let (Some(estimate), true) = (&row.estimate, display.verbose()) {
+            let text = estimate.describe(unit);
             if bar.is_hidden() {
                 eprintln!("{text}");
             } else {

@@ -72,6 +72,6 @@ pub use config::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
 pub use error::{Context, Error, Result};
 pub use plan::{default_out, plan, TrainPlan, TrainRequest};
 pub use run_dir::RunDir;
-pub use session::Session;
+pub use session::{human_duration, Estimate, Pace, Session};
 pub use summary::Summary;
 pub use training::{Opening, RowDone, Training};

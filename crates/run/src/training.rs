@@ -50,6 +50,9 @@ pub struct RowDone {
     /// A walking check that finished while this row ran: of the policy of the row before,
     /// when that one was due a check.
     pub check: Option<CheckRecord>,
+    /// The time the session has left, on the row that first gives a pace
+    /// ([`crate::Session::step`]; a [`Training`] alone leaves it `None`).
+    pub estimate: Option<crate::session::Estimate>,
 }
 
 /// A learner and the run folder it trains into.
@@ -337,6 +340,7 @@ impl<L: Learner> Training<L> {
             best: previous_best.max(curve),
             summary: row.summary(),
             check,
+            estimate: None,
         })
     }
 
