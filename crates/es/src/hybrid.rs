@@ -183,17 +183,50 @@ pub struct EsState {
     pub loop_stats: LoopStats,
 }
 
+/// The loop's settings: the ES (its population, σ schedule, how individuals act while
+/// scored, the order of replacement and training) and the inner training.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HybridConfig {
+    /// The evolution strategy and the loop order ([`EsConfig::fitness`], [`EsConfig::order`]).
+    pub es: EsConfig,
+    /// Inner training cycles (minibatch updates) per generation.
+    pub inner_cycles: usize,
+    /// When set, the inner cycles of a generation are this many per environment step it
+    /// collected (rounded) instead of `inner_cycles`: the update-to-data ratio stays fixed as
+    /// episodes lengthen.
+    pub updates_per_step: Option<f64>,
+    /// Whether [`Hybrid::step`] rolls the next generation's perturbations out while the inner
+    /// cycles train (module docs). Results are the same either way.
+    pub pipelined: bool,
+}
+
+impl HybridConfig {
+    /// `es` with a fixed `inner_cycles` per generation, pipelined.
+    pub fn new(es: EsConfig, inner_cycles: usize) -> Self {
+        Self {
+            es,
+            inner_cycles,
+            updates_per_step: None,
+            pipelined: true,
+        }
+    }
+
+    /// The inner training cycles of a generation that collected `steps` environment steps.
+    pub fn inner_cycles_for(&self, steps: usize) -> usize {
+        match self.updates_per_step {
+            Some(ratio) => (ratio * steps as f64).round() as usize,
+            None => self.inner_cycles,
+        }
+    }
+}
+
 /// The hybrid learner: an RL trainer (agent + buffer), the ES distribution, and the
 /// evaluator that rolls its populations out.
 #[derive(Debug, Clone)]
 pub struct Hybrid {
     trainer: Trainer,
     strategy: Strategy,
-    es: EsConfig,
-    inner_cycles: usize,
-    /// When set, the inner cycles of a generation are this many per environment step it
-    /// collected (rounded) instead of `inner_cycles`.
-    updates_per_step: Option<f64>,
+    cfg: HybridConfig,
     generation: usize,
     /// The genome of the last generation's best individual (empty before the first).
     kept: Vec<f32>,
@@ -201,8 +234,6 @@ pub struct Hybrid {
     rl_trained: bool,
     stats: LoopStats,
     evaluator: Arc<dyn Evaluator>,
-    /// Whether [`Hybrid::step`] rolls the next perturbations out during the training.
-    pipelined: bool,
     /// The next generation's perturbations and their evaluations, rolled out during the
     /// last training.
     prefetched: Option<Prefetched>,
@@ -222,26 +253,17 @@ const ES_MEAN: &str = "es.mean";
 impl Hybrid {
     /// Starts the ES distribution at the agent's own genome, in the run with seed `seed`;
     /// `evaluator` rolls the populations out.
-    pub fn new(
-        agent: Agent,
-        es: EsConfig,
-        inner_cycles: usize,
-        seed: u64,
-        evaluator: Arc<dyn Evaluator>,
-    ) -> Self {
-        let strategy = Strategy::new(agent.genome(), es.sigma, seed);
+    pub fn new(agent: Agent, cfg: HybridConfig, seed: u64, evaluator: Arc<dyn Evaluator>) -> Self {
+        let strategy = Strategy::new(agent.genome(), cfg.es.sigma, seed);
         Self {
             trainer: Trainer::new(agent, seed),
             strategy,
-            es,
-            inner_cycles,
-            updates_per_step: None,
+            cfg,
             generation: 0,
             kept: Vec::new(),
             rl_trained: false,
             stats: LoopStats::default(),
             evaluator,
-            pipelined: true,
             prefetched: None,
         }
     }
@@ -249,7 +271,7 @@ impl Hybrid {
     /// Whether [`Hybrid::step`] pipelines (default true): rolls the next generation's
     /// perturbations out while the inner cycles train. Results are the same either way.
     pub fn set_pipelined(&mut self, on: bool) {
-        self.pipelined = on;
+        self.cfg.pipelined = on;
         if !on {
             self.prefetched = None;
         }
@@ -257,7 +279,7 @@ impl Hybrid {
 
     /// Whether [`Hybrid::step`] pipelines.
     pub fn pipelined(&self) -> bool {
-        self.pipelined
+        self.cfg.pipelined
     }
 
     /// The RL side: agent, replay buffer, random stream, step counter.
@@ -277,39 +299,31 @@ impl Hybrid {
 
     /// The ES settings.
     pub fn es(&self) -> &EsConfig {
-        &self.es
+        &self.cfg.es
     }
 
     /// Gradient updates per generation.
     pub fn inner_cycles(&self) -> usize {
-        self.inner_cycles
+        self.cfg.inner_cycles
     }
 
     /// Sets the gradient updates of the following generations (0 isolates the evaluation
     /// and replacement, as the loop's tests do).
     pub fn set_inner_cycles(&mut self, cycles: usize) {
-        self.inner_cycles = cycles;
+        self.cfg.inner_cycles = cycles;
     }
 
     /// Gradient updates per environment step collected, when set (see
     /// [`Hybrid::set_updates_per_step`]).
     pub fn updates_per_step(&self) -> Option<f64> {
-        self.updates_per_step
+        self.cfg.updates_per_step
     }
 
     /// When `Some(ratio)`, the inner cycles of each following generation are `ratio` per
     /// environment step that generation collected (rounded), replacing the fixed
     /// [`Hybrid::inner_cycles`]: the update-to-data ratio stays fixed as episodes lengthen.
     pub fn set_updates_per_step(&mut self, ratio: Option<f64>) {
-        self.updates_per_step = ratio;
-    }
-
-    /// The inner training cycles of a generation that collected `steps` environment steps.
-    fn inner_cycles_for(&self, steps: usize) -> usize {
-        match self.updates_per_step {
-            Some(ratio) => (ratio * steps as f64).round() as usize,
-            None => self.inner_cycles,
-        }
+        self.cfg.updates_per_step = ratio;
     }
 
     /// Generations completed.
@@ -344,7 +358,7 @@ impl Hybrid {
     /// This generation's individuals: the RL actor's genome first, then N − 1 perturbations of
     /// the ES mean.
     pub fn population(&self) -> Vec<Vec<f32>> {
-        let n = self.es.population;
+        let n = self.cfg.es.population;
         let mut genomes = Vec::with_capacity(n);
         genomes.push(self.trainer.agent().genome());
         genomes.extend((1..n).map(|i| self.strategy.perturbation(i)));
@@ -356,7 +370,7 @@ impl Hybrid {
         let spec = |mode, scored| RolloutSpec { mode, scored };
         let explore = vec![spec(ActMode::Explore, true)];
         let deterministic = vec![spec(ActMode::Deterministic, true)];
-        match self.es.fitness {
+        match self.cfg.es.fitness {
             Fitness::Auto if self.trainer.agent().has_entropy() => explore,
             Fitness::Auto | Fitness::Deterministic => deterministic,
             Fitness::Sampled => explore,
@@ -380,7 +394,7 @@ impl Hybrid {
     /// Generation `gen`'s individuals 1.. (the perturbations of the current ES mean), ready
     /// to roll out: valid once the ES update of generation `gen − 1` is done.
     fn perturbations(&self, gen: usize) -> Vec<Genome> {
-        let params = (1..self.es.population).map(|i| self.strategy.perturbation(i));
+        let params = (1..self.cfg.es.population).map(|i| self.strategy.perturbation(i));
         self.genomes(gen, 1, params)
     }
 
@@ -395,7 +409,7 @@ impl Hybrid {
     ) -> Vec<Genome> {
         let seed = self.trainer.seed();
         let gen = gen as u64;
-        let k = self.es.evaluations as u64;
+        let k = self.cfg.es.evaluations as u64;
         let env_seeds: Vec<u64> = (0..k)
             .map(|evaluation| {
                 Stream::EvaluationReset {
@@ -479,20 +493,20 @@ impl Hybrid {
         // Eqs. 10–11: the elites' weighted mean becomes θ, and σ decays toward σ_min.
         let fitness: Vec<f64> = evaluated.iter().map(|e| e.fitness).collect();
         let refs: Vec<&[f32]> = genomes.iter().map(|g| g.params.as_slice()).collect();
-        let order = self.strategy.update(&refs, &fitness, &self.es);
+        let order = self.strategy.update(&refs, &fitness, &self.cfg.es);
         let best = order[0];
         let replaced = best != 0 && fitness[best] > fitness[0];
 
         // Elitist replacement and the inner training cycles, in the configured order.
-        let losses = match self.es.order {
+        let losses = match self.cfg.es.order {
             LoopOrder::ReplaceThenTrain => {
                 if replaced {
                     self.trainer.agent_mut().set_genome(&genomes[best].params)?;
                 }
-                self.train(self.inner_cycles_for(steps), prefetch)?
+                self.train(self.cfg.inner_cycles_for(steps), prefetch)?
             }
             LoopOrder::TrainThenReplace => {
-                let losses = self.train(self.inner_cycles_for(steps), prefetch)?;
+                let losses = self.train(self.cfg.inner_cycles_for(steps), prefetch)?;
                 if replaced {
                     self.trainer.agent_mut().set_genome(&genomes[best].params)?;
                 }
@@ -500,7 +514,7 @@ impl Hybrid {
             }
         };
         let trained_now = losses.critic().is_some();
-        self.rl_trained = match self.es.order {
+        self.rl_trained = match self.cfg.es.order {
             LoopOrder::ReplaceThenTrain => trained_now,
             LoopOrder::TrainThenReplace => trained_now && !replaced,
         };
@@ -519,7 +533,7 @@ impl Hybrid {
             rl_fitness: fitness[0],
             rl_trained,
             rl_rank,
-            rl_elite: rl_rank < self.es.elites(),
+            rl_elite: rl_rank < self.cfg.es.elites(),
             rl_replaced: replaced,
             sigma: self.strategy.sigma,
             alpha: agent.has_entropy().then(|| agent.alpha()),
@@ -538,7 +552,7 @@ impl Hybrid {
     pub fn step(&mut self) -> Result<GenerationReport, AgentError> {
         let generation = self.ask(); // eq. 8
         let evaluated = self.evaluate(&generation)?; // eq. 9
-        self.tell_and_prefetch(&generation, evaluated, self.pipelined)
+        self.tell_and_prefetch(&generation, evaluated, self.cfg.pipelined)
     }
 
     /// Eq. 9 on the evaluator. Pipelined, individuals 1.. were rolled out during the last
@@ -565,7 +579,7 @@ impl Hybrid {
     /// rollouts of the next generation's perturbations (kept for [`Hybrid::evaluate`]; an
     /// evaluation error there surfaces when that generation is evaluated again).
     fn train(&mut self, cycles: usize, prefetch: bool) -> Result<LossMeans, AgentError> {
-        if !prefetch || self.es.population < 2 {
+        if !prefetch || self.cfg.es.population < 2 {
             return self.trainer.train(cycles);
         }
         let next = Generation {
@@ -676,8 +690,8 @@ impl Resumable for Hybrid {
         }
         let sigma = state.sigma;
         let (lo, hi) = (
-            self.es.sigma.min(self.es.sigma_min),
-            self.es.sigma.max(self.es.sigma_min),
+            self.cfg.es.sigma.min(self.cfg.es.sigma_min),
+            self.cfg.es.sigma.max(self.cfg.es.sigma_min),
         );
         if !(sigma.is_finite() && sigma >= lo * (1.0 - 1e-9) && sigma <= hi * (1.0 + 1e-9)) {
             return bad(
@@ -726,7 +740,7 @@ impl Resumable for Hybrid {
         self.generation = state.generations;
         // A loop without inner training never carries a trained actor.
         self.rl_trained =
-            state.rl_trained && (self.inner_cycles > 0 || self.updates_per_step.is_some());
+            state.rl_trained && (self.cfg.inner_cycles > 0 || self.cfg.updates_per_step.is_some());
         self.stats = state.loop_stats;
         Ok(())
     }

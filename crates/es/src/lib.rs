@@ -22,7 +22,7 @@
 //!
 //! ```
 //! use esrl_agents::{Agent, Algo, NetConfig, RlConfig};
-//! use esrl_es::{EsConfig, Hybrid, LocalEvaluator};
+//! use esrl_es::{EsConfig, Hybrid, HybridConfig, LocalEvaluator};
 //! use esrl_sim::{Env, MakeEnv, Pendulum};
 //! use std::sync::Arc;
 //!
@@ -31,7 +31,7 @@
 //! let envs: Arc<MakeEnv> = Arc::new(|| Box::new(Pendulum::new()) as Box<dyn Env>);
 //! let evaluator = Arc::new(LocalEvaluator::new(envs, 2).expect("a thread pool"));
 //! let es = EsConfig { population: 4, ..EsConfig::default() };
-//! let mut hybrid = Hybrid::new(agent, es, 5, 0, evaluator);
+//! let mut hybrid = Hybrid::new(agent, HybridConfig::new(es, 5), 0, evaluator);
 //! hybrid.warm_start(&mut Pendulum::new());
 //! let row = hybrid.step()?;
 //! assert_eq!(row.generation, 0);
@@ -62,7 +62,7 @@ pub mod wire;
 pub use evaluate::{
     rollout_genome, Evaluation, Evaluator, Generation, Genome, LocalEvaluator, RolloutSpec,
 };
-pub use hybrid::{EsState, GenerationReport, Hybrid, LoopStats};
+pub use hybrid::{EsState, GenerationReport, Hybrid, HybridConfig, LoopStats};
 pub use remote::{Traffic, Transport, WireEvaluator, Worker};
 pub use strategy::{elite_weights, rank, ConfigError, EsConfig, Fitness, LoopOrder, Strategy};
 pub use wire::{decode_evaluation, decode_genome, encode_evaluation, encode_genome, WireError};

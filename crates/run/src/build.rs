@@ -4,7 +4,7 @@
 use crate::config::{EnvKind, TrainConfig};
 use crate::error::{Context, Error, Result};
 use esrl_agents::{Agent, Trainer};
-use esrl_es::{Evaluator, Hybrid, LocalEvaluator, Worker};
+use esrl_es::{Evaluator, Hybrid, HybridConfig, LocalEvaluator, Worker};
 use esrl_sim::{Env, MakeEnv, Pendulum, RobotModel, WalkConfig, WalkEnv};
 use std::sync::Arc;
 
@@ -154,8 +154,11 @@ pub fn learner_with(
         None
     };
     Ok(if cfg.agent.is_hybrid() {
-        let mut hybrid = Hybrid::new(agent, cfg.es.clone(), cfg.inner_cycles, cfg.seed, evaluator);
-        hybrid.set_updates_per_step(cfg.updates_per_step);
+        let loop_cfg = HybridConfig {
+            updates_per_step: cfg.updates_per_step,
+            ..HybridConfig::new(cfg.es.clone(), cfg.inner_cycles)
+        };
+        let mut hybrid = Hybrid::new(agent, loop_cfg, cfg.seed, evaluator);
         hybrid.trainer_mut().set_mirror(mirror);
         AnyLearner::Hybrid(Box::new(hybrid))
     } else {

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use esrl_agents::{Agent, Algo, NetConfig, RlConfig};
-use esrl_es::{EsConfig, Evaluator, Hybrid, LocalEvaluator};
+use esrl_es::{EsConfig, Evaluator, Hybrid, HybridConfig, LocalEvaluator};
 use esrl_sim::{Env, MakeEnv, Pendulum};
 use std::sync::Arc;
 
@@ -35,7 +35,7 @@ pub fn hybrid_with(
         sigma: 0.5,
         ..es
     };
-    let mut h = Hybrid::new(agent, es, inner_cycles, 7, evaluator);
+    let mut h = Hybrid::new(agent, HybridConfig::new(es, inner_cycles), 7, evaluator);
     h.warm_start(&mut Pendulum::new());
     h
 }
