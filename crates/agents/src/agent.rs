@@ -1,7 +1,7 @@
 //! One off-policy actor-critic agent covering SAC, TD3 and DDPG: its networks, optimisers,
 //! entropy coefficient and random stream, and what differs between the three algorithms,
 //! resolved once when the agent is built ([`Agent::new`]). The update itself is
-//! [`Agent::update`] (`sac.rs`, `td3.rs`, `update.rs`).
+//! [`Agent::update`] (`update.rs`, `sac.rs`, `td3.rs`, `steps.rs`).
 //!
 //! - **SAC** (Haarnoja et al. 2018; paper §3.1, eqs. 1–7): tanh-squashed Gaussian actor, twin
 //!   critics with Polyak-averaged targets, a learned entropy coefficient α.

@@ -1,5 +1,5 @@
 //! The deterministic parallel execution of an update, kept apart from its maths
-//! ([`sac`](crate::sac), [`td3`](crate::td3)): the batch is cut into `rl.batch_chunks` fixed
+//! (`sac.rs`, `td3.rs`): the batch is cut into `rl.batch_chunks` fixed
 //! [`Part`]s that the losses run on side by side, random numbers are drawn for the whole
 //! batch in row order and split like it, gradients are summed in part order, and the actor
 //! loss's graph is cut at the action so the critics run side by side ([`through_critics`]).
@@ -7,12 +7,39 @@
 //! batch, and the part bounds depend on the batch size and the chunk count only, never on
 //! the thread count.
 
-use crate::update::{BurnIn, Trained};
 use esrl_nn::{Actor, Critic, Graph, LstmState, Module, NnError, Tensor, Var};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
 use rayon::prelude::*;
+
+/// The trained part of a batch (its last `seq_len` steps) as tensors, time-major
+/// `(len·B, ·)`, with the loss normaliser 1/M.
+pub(crate) struct Trained {
+    pub(crate) batch: usize,
+    pub(crate) obs: Tensor,
+    pub(crate) action: Tensor,
+    pub(crate) reward: Tensor,
+    pub(crate) next_obs: Tensor,
+    /// 1 − terminated.
+    pub(crate) not_done: Tensor,
+    pub(crate) mask: Tensor,
+    /// 1/M, M the number of masked (real) steps.
+    pub(crate) norm: f32,
+    /// α at the start of the update (0 without the entropy term).
+    pub(crate) alpha: f32,
+    /// The buffer's reward range when the batch was drawn.
+    pub(crate) reward_range: (f32, f32),
+}
+
+/// Recurrent states after burn-in (`None` entries for feed-forward networks).
+pub(crate) struct BurnIn {
+    pub(crate) actor: Option<LstmState>,
+    /// The actor that picks the target action (the target actor of TD3/DDPG), at s′.
+    pub(crate) actor_next: Option<LstmState>,
+    pub(crate) critics: Vec<Option<LstmState>>,
+    pub(crate) critic_targets: Vec<Option<LstmState>>,
+}
 
 /// One share of a batch, batch entries `[b0, b1)` of the trained part: its tensors, its TD
 /// targets and the networks' states after burn-in. The loss normaliser stays the whole

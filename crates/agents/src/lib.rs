@@ -4,7 +4,7 @@
 //! One [`Agent`] type covers the three algorithms; [`Agent::update`] dispatches on the
 //! algorithm to its update, each written top to bottom under its equation numbers in its own
 //! file (`sac.rs`, `td3.rs`; DDPG is TD3 with one critic and its tricks off,
-//! [`RlConfig::for_algo`]), with the steps they share in `update.rs` and the deterministic
+//! [`RlConfig::for_algo`]), with the steps they share in `steps.rs` and the deterministic
 //! parallel execution over parts of the batch in `chunks.rs`.
 //! Networks come from `esrl-nn` (the paper's LSTM actor and critics, or MLPs); experience
 //! lives in an episode-aware [`ReplayBuffer`] that samples windows of consecutive steps for
@@ -48,6 +48,7 @@ pub mod policy;
 pub mod replay;
 pub mod rollout;
 mod sac;
+mod steps;
 mod td3;
 pub mod train;
 mod update;

@@ -3,12 +3,12 @@
 //! reparameterised loss, the entropy coefficient's step and the Polyak average of the target
 //! critics. The batch's parts and their side-by-side execution are
 //! [`chunks`](crate::chunks)'; the steps shared with TD3 (burn-in, eq. 4, the target's
-//! tail, eq. 7) are in [`update`](crate::update).
+//! tail, eq. 7) are in `steps.rs`.
 
 use crate::agent::{Agent, AgentError, UpdateStats};
 use crate::chunks::{self, ActorPass, Part};
 use crate::replay::SequenceBatch;
-use crate::update::{polyak, soft_target, step_actor, train_critics};
+use crate::steps::{polyak, soft_target, step_actor, train_critics};
 use esrl_nn::{Actor, Graph, Tensor};
 
 /// One SAC update on `batch`.

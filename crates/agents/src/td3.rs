@@ -4,12 +4,12 @@
 //! deterministic policy gradient through Q₁ and the Polyak average of every target. DDPG is
 //! this update with one critic, no smoothing and no delay ([`crate::RlConfig::for_algo`]),
 //! as Stable-Baselines3 has it. The batch's parts and their side-by-side execution are
-//! [`chunks`](crate::chunks)'; the steps shared with SAC are in [`update`](crate::update).
+//! [`chunks`](crate::chunks)'; the steps shared with SAC are in `steps.rs`.
 
 use crate::agent::{Agent, AgentError, Smoothing, UpdateStats};
 use crate::chunks::{self, ActorPass, Part};
 use crate::replay::SequenceBatch;
-use crate::update::{polyak, soft_target, step_actor, train_critics};
+use crate::steps::{polyak, soft_target, step_actor, train_critics};
 use esrl_nn::{Actor, Graph, Module, Tensor};
 
 /// One TD3/DDPG update on `batch`.

@@ -52,7 +52,7 @@ pub struct RowDone {
     pub check: Option<CheckRecord>,
     /// The time the session has left, on the row that first gives a pace
     /// ([`crate::Session::step`]; a [`Training`] alone leaves it `None`).
-    pub estimate: Option<crate::session::Estimate>,
+    pub estimate: Option<crate::pace::Estimate>,
 }
 
 /// A learner and the run folder it trains into.
