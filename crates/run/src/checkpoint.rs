@@ -41,6 +41,7 @@
 
 use crate::bail;
 use crate::check::{CheckResult, CheckState};
+use crate::compat;
 use crate::config::{config_differences, TrainConfig};
 use crate::error::{Context, Result};
 use crate::run_dir::{write_atomic, write_json_atomic, RunDir};
@@ -53,9 +54,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::fs;
 use std::path::{Path, PathBuf};
 
-/// Version of `state.json` written now. From version 2 DDPG checkpoints honour their
-/// config's `rl.policy_delay` and `rl.target_noise`; version 1 DDPG trained with 1 and 0
-/// whatever the config said ([`legacy_ddpg_settings`]).
+/// Version of `state.json` written now. What earlier versions meant is in `compat.rs`.
 pub const STATE_VERSION: u32 = 2;
 
 /// The run's own part of `state.json`: how far it is, and the replay chunks its buffer is
@@ -397,7 +396,7 @@ pub fn verify_manifest(dir: &Path) -> Result<()> {
     let p = dir.join("manifest.json");
     if !p.exists() {
         let version = read_run_state(dir).map(|s| s.version).unwrap_or(1);
-        if dir.join("state.json").exists() && version >= 2 {
+        if dir.join("state.json").exists() && compat::has_manifest(version) {
             bail!(
                 "{} is missing: a checkpoint of this format always has one, so it was removed \
                  and nothing in {} can be verified. Restore it, or start a new run",
@@ -431,30 +430,15 @@ pub fn verify_manifest(dir: &Path) -> Result<()> {
     Ok(())
 }
 
-/// DDPG checkpoints before [`STATE_VERSION`] 2 were trained while DDPG ignored
-/// `rl.policy_delay` and `rl.target_noise` (TD3's tricks, which their config.toml still lists
-/// at TD3's 2 and 0.2): it trained as if they were 1 and 0. Sets them so, for a DDPG-family
-/// `cfg`, and says whether anything changed.
-pub fn legacy_ddpg_settings(cfg: &mut TrainConfig) -> bool {
-    if cfg.agent.algo() != esrl_agents::Algo::Ddpg {
-        return false;
-    }
-    let before = (cfg.rl.policy_delay, cfg.rl.target_noise);
-    cfg.rl.policy_delay = 1;
-    cfg.rl.target_noise = 0.0;
-    before != (1, 0.0)
-}
-
 /// A run folder's configuration as it trains: its `config.toml`, with the settings its
 /// newest checkpoint was trained with where the meaning of a key changed since
-/// ([`legacy_ddpg_settings`]). Returns the config and whether it differs from the file.
+/// (`compat.rs`). Returns the config and whether it differs from the file.
 pub fn run_config(run: &Path) -> Result<(TrainConfig, bool)> {
     let mut cfg = TrainConfig::load(&run.join(RunDir::CONFIG))?;
-    let legacy = match find(run) {
-        Some(dir) => read_run_state(&dir)?.version < 2,
+    let changed = match find(run) {
+        Some(dir) => compat::as_trained(&mut cfg, read_run_state(&dir)?.version),
         None => false,
     };
-    let changed = legacy && legacy_ddpg_settings(&mut cfg);
     Ok((cfg, changed))
 }
 
@@ -496,9 +480,7 @@ pub fn policy_config(run: &Path, dir: &Path) -> Result<TrainConfig> {
         .parent()
         .and_then(|d| read_run_state(d).ok())
         .map_or(STATE_VERSION, |s| s.version);
-    if version < 2 {
-        legacy_ddpg_settings(&mut stored);
-    }
+    compat::as_trained(&mut stored, version);
     let diff = fixed_differences(&stored, &run_cfg)?;
     if !diff.is_empty() {
         bail!(
@@ -522,9 +504,7 @@ pub fn check_config(dir: &Path, state: &RunState, cfg: &TrainConfig) -> Result<(
         return Ok(());
     }
     let mut stored = TrainConfig::load(&p)?;
-    if state.version < 2 {
-        legacy_ddpg_settings(&mut stored);
-    }
+    compat::as_trained(&mut stored, state.version);
     let diff = fixed_differences(&stored, cfg)?;
     if !diff.is_empty() {
         bail!(

@@ -45,6 +45,7 @@
 pub mod build;
 pub mod check;
 pub mod checkpoint;
+mod compat;
 pub mod config;
 mod error;
 pub mod pace;
