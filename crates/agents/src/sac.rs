@@ -26,16 +26,9 @@ pub(crate) fn update(agent: &mut Agent, batch: &SequenceBatch) -> Result<UpdateS
         || chunks::each(&parts, eps_next, |p, eps| td_target(agent, p, eps)),
         || chunks::each(&parts, eps_now, |p, eps| actor_sample(actor, p, eps)),
     );
-    for (p, y) in parts.iter_mut().zip(ys) {
-        p.y = y;
-    }
     // Eq. 4: each critic toward y.
-    let (critic_loss, q_mean) = train_critics(
-        &mut agent.critics,
-        &mut agent.opt_critics,
-        &parts,
-        agent.updates,
-    )?;
+    let (critics, opts) = (&mut agent.critics, &mut agent.opt_critics);
+    let (critic_loss, q_mean) = train_critics(critics, opts, &mut parts, ys, agent.updates)?;
     // Eq. 5 through the stepped critics, beside eq. 7 for the target critics.
     let tau = agent.cfg.tau as f32;
     let (critics, actor, alpha) = (&agent.critics, &agent.actor, agent.alpha() as f32);

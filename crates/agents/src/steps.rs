@@ -250,7 +250,8 @@ pub(crate) fn soft_target(
     Tensor::from_vec(qmin.len(), 1, y)
 }
 
-/// Eq. 4, summed over the critics, with one Adam step each:
+/// Eq. 4 toward the TD targets `ys` (one per part, kept in the parts), summed over the
+/// critics, with one Adam step each:
 ///
 /// L(Qₖ) = 1/(2M) Σ m·(Qₖ(s, a) − y)²,
 ///
@@ -262,9 +263,14 @@ pub(crate) fn soft_target(
 pub(crate) fn train_critics(
     critics: &mut [Critic],
     opts: &mut [Adam],
-    parts: &[Part],
+    parts: &mut [Part],
+    ys: Vec<Tensor>,
     updates: u64,
 ) -> Result<(f64, f64), AgentError> {
+    for (p, y) in parts.iter_mut().zip(ys) {
+        p.y = y;
+    }
+    let parts = &*parts;
     let one = |c: &Critic, ch: &Part, state: &Option<LstmState>| {
         let p = &ch.data;
         let mut g = Graph::new();

@@ -34,16 +34,9 @@ pub(crate) fn update(agent: &mut Agent, batch: &SequenceBatch) -> Result<UpdateS
         || chunks::each(&parts, eps_next, |p, eps| td_target(agent, p, eps)),
         || actor_due.then(|| chunks::each(&parts, vec![(); parts.len()], |p, ()| act(actor, p))),
     );
-    for (p, y) in parts.iter_mut().zip(ys) {
-        p.y = y;
-    }
     // Eq. 4: each critic toward y.
-    let (critic_loss, q_mean) = train_critics(
-        &mut agent.critics,
-        &mut agent.opt_critics,
-        &parts,
-        agent.updates,
-    )?;
+    let (critics, opts) = (&mut agent.critics, &mut agent.opt_critics);
+    let (critic_loss, q_mean) = train_critics(critics, opts, &mut parts, ys, agent.updates)?;
     let mut actor_loss = None;
     if let Some(passes) = passes {
         // The deterministic policy gradient through Q₁, beside eq. 7 for the target critics.
