@@ -21,6 +21,7 @@ pub(crate) fn update(agent: &mut Agent, batch: &SequenceBatch) -> Result<UpdateS
     // ε for a′ ~ π(·|s′) (eq. 3), then for ã ~ π(·|s) (eq. 5), drawn in that order.
     let eps_next = chunks::normal_noise(&mut agent.rng, &parts, agent.act_dim);
     let eps_now = chunks::normal_noise(&mut agent.rng, &parts, agent.act_dim);
+    // Eq. 3 (the TD targets) beside the first half of eq. 5 (ã and log π at s).
     let actor = &agent.actor;
     let (ys, passes) = rayon::join(
         || chunks::each(&parts, eps_next, |p, eps| td_target(agent, p, eps)),
@@ -45,6 +46,7 @@ pub(crate) fn update(agent: &mut Agent, batch: &SequenceBatch) -> Result<UpdateS
         || polyak(&mut agent.critic_targets, critics, tau),
     );
     let (loss, log_probs) = step_actor(agent, losses)?;
+    // Eq. 6: α toward the target entropy.
     train_alpha(agent, &log_probs, &parts)?;
     targets?;
     agent.updates += 1;

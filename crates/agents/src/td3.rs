@@ -29,6 +29,7 @@ pub(crate) fn update(agent: &mut Agent, batch: &SequenceBatch) -> Result<UpdateS
             .collect(),
         None => vec![None; parts.len()],
     };
+    // Eq. 3 (the TD targets) beside the first half of the actor loss (μ(s)), when due.
     let actor = &agent.actor;
     let (ys, passes) = rayon::join(
         || chunks::each(&parts, eps_next, |p, eps| td_target(agent, p, eps)),
