@@ -12,9 +12,11 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};
 
 /// Products of fewer multiply-adds than this run on the calling thread: below it, waking
-/// another thread costs more than it saves (≈ 80 µs of work on one core; on the SAC update
-/// with MLP 256×256 networks at 2 threads, 2²² gave 5.8 ms, 2²⁰ 6.3 ms, no split 6.3 ms).
-const PAR_MIN_WORK: usize = 1 << 22;
+/// another thread costs more than it saves. 2²³ keeps the walking recipe's batch-64 products
+/// of the 256-wide layers (64·256·256 = 2²²) whole: on the 2-core Intel machine its ES
+/// generation took 0.310–0.327 s at 2 threads against 0.333–0.336 s with 2²² (`esrl bench es
+/// --preset walking`, alternated); batch 128 and larger still split.
+const PAR_MIN_WORK: usize = 1 << 23;
 /// A block keeps at least this many rows (or columns) so faer's kernels stay efficient.
 const MIN_BLOCK: usize = 8;
 
