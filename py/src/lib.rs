@@ -34,6 +34,9 @@ use pyo3::prelude::*;
 #[pyo3(name = "_native")]
 fn native(module: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = module.py();
+    // Rayon's global pool flushes subnormal floats like every pool of esrl's
+    // (`esrl_nn::subnormal`); Python's own threads keep their mode.
+    esrl_nn::subnormal::init_global_pool();
     module.add("EsrlError", py.get_type::<errors::EsrlError>())?;
     module.add("__version__", env!("CARGO_PKG_VERSION"))?;
     module.add("HUMANOID_URDF", esrl_sim::HUMANOID_URDF)?;

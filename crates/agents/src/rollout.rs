@@ -102,8 +102,18 @@ impl<E: ?Sized, R: Rng + ?Sized> EpisodeHook<E> for Keep<'_, '_, R> {
 
 /// Runs one episode from `env.reset(env_seed)` until it terminates or is truncated (or after
 /// `max_steps`, counted as truncation), drawing actions' randomness from `rng`, and returns
-/// its transitions.
+/// its transitions. Subnormal floats are flushed to zero meanwhile ([`esrl_nn::subnormal`]).
 pub fn rollout<R: Rng + ?Sized>(
+    env: &mut dyn Env,
+    actor: Actor<'_>,
+    env_seed: u64,
+    max_steps: Option<usize>,
+    rng: &mut R,
+) -> Episode {
+    esrl_nn::subnormal::flushing(|| rollout_here(env, actor, env_seed, max_steps, rng))
+}
+
+fn rollout_here<R: Rng + ?Sized>(
     env: &mut dyn Env,
     mut actor: Actor<'_>,
     env_seed: u64,

@@ -10,11 +10,12 @@ use crate::replay::SequenceBatch;
 use crate::{sac, td3};
 
 impl Agent {
-    /// One gradient update on `batch`: the algorithm's (`sac.rs`, or `td3.rs` for TD3 and DDPG).
+    /// One gradient update on `batch`: the algorithm's (`sac.rs`, or `td3.rs` for TD3 and DDPG),
+    /// with subnormal floats flushed to zero ([`esrl_nn::subnormal`]).
     pub fn update(&mut self, batch: &SequenceBatch) -> Result<UpdateStats, AgentError> {
-        match self.algo {
+        esrl_nn::subnormal::flushing(|| match self.algo {
             Algo::Sac => sac::update(self, batch),
             Algo::Td3 | Algo::Ddpg => td3::update(self, batch),
-        }
+        })
     }
 }

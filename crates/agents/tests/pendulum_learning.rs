@@ -13,10 +13,7 @@ use esrl_sim::{Env, Pendulum};
 /// fine-grained parallel steps wait for descheduled threads (the result does not depend on
 /// the thread count).
 fn train(algo: Algo, nets: &NetConfig, cfg: &RlConfig, seed: u64, episodes: usize) -> f64 {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
+    let pool = esrl_nn::subnormal::thread_pool(1).unwrap();
     pool.install(|| train_here(algo, nets, cfg, seed, episodes))
 }
 

@@ -25,10 +25,7 @@ fn on_threads(
     batch: usize,
     chunks: usize,
 ) -> Vec<u32> {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
+    let pool = esrl_nn::subnormal::thread_pool(threads).unwrap();
     let (agent, _) = pool
         .install(|| bench::train_on_random_data(algo, nets, 31, 6, batch, chunks, 20))
         .unwrap();

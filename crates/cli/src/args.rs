@@ -290,6 +290,10 @@ pub enum BenchWhat {
         /// Control steps to run.
         #[arg(long, default_value_t = 20_000)]
         steps: usize,
+        /// Preset whose walking task is stepped (action mode, servo, gait clock); default
+        /// the paper's task (torque actions), the one `mujoco_urdf.py` compares with.
+        #[arg(long, value_enum)]
+        preset: Option<Preset>,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,

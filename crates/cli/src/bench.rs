@@ -34,9 +34,7 @@ pub fn update_ms(
         Arch::Lstm => NetConfig::default(),
         Arch::Mlp => NetConfig::feed_forward(),
     };
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.max(1))
-        .build()?;
+    let pool = esrl_nn::subnormal::thread_pool(threads.max(1))?;
     Ok(pool.install(|| {
         bench::time_update(Algo::Sac, &nets, obs_dim, 6, batch, reps, 2, batch_chunks)
     })?)
@@ -50,6 +48,7 @@ const ES_BENCH_GENERATIONS: usize = 5;
 fn es_generation_s(preset: Preset, threads: usize) -> Result<(f64, u64)> {
     let mut cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, preset);
     cfg.inner_cycles = 0;
+    cfg.updates_per_step = None;
     cfg.rl.warm_start = 0;
     let envs = build::envs(cfg.env, &cfg.walk)?;
     let AnyLearner::Hybrid(mut h) = build::learner(&cfg, &envs)? else {
@@ -103,8 +102,16 @@ fn whole_generation_s(
 /// Runs `esrl bench`.
 pub fn run(what: &BenchWhat) -> Result<()> {
     match what {
-        BenchWhat::Env { steps, json } => {
-            let r = esrl_sim::bench::bench_walk(&esrl_sim::WalkConfig::default(), *steps, 0)?;
+        BenchWhat::Env {
+            steps,
+            preset,
+            json,
+        } => {
+            let walk = match preset {
+                Some(p) => TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, *p).walk,
+                None => esrl_sim::WalkConfig::default(),
+            };
+            let r = esrl_sim::bench::bench_walk(&walk, *steps, 0)?;
             let text = format!(
                 "walking env, one core: {:.0} control steps/s ({} steps in {:.2} s, {} episodes, \
                  {:.0}× real time); physics dt {} s × {} substeps, {} solver iterations",
@@ -203,7 +210,11 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             let batch = cfg.rl.batch_size;
             let upd = update_ms(arch, 31, batch, 3, 1, chunks)?.ms_per_update;
             let upd_n = update_ms(arch, 31, batch, 3, *threads, chunks)?.ms_per_update;
-            let train_s = upd * cfg.inner_cycles as f64 / 1e3;
+            // The inner updates of a generation that collected `steps` env steps.
+            let cycles = cfg
+                .updates_per_step
+                .map_or(cfg.inner_cycles, |r| (r * steps as f64).round() as usize);
+            let train_s = upd * cycles as f64 / 1e3;
             let (g1, whole) = whole_generation_s(*preset, 1, None)?;
             let (gn, _) = whole_generation_s(*preset, *threads, Some(whole))?;
             let r = json!({
@@ -215,7 +226,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                 "eval_s_n_threads": tn,
                 "threads": threads,
                 "parallel_efficiency": eff,
-                "inner_cycles": cfg.inner_cycles,
+                "inner_cycles": cycles,
                 "update_ms": upd,
                 "update_ms_n_threads": upd_n,
                 "train_s_per_generation": train_s,
@@ -234,7 +245,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                  {whole} after one): {g1:.2} s on 1 thread, {gn:.2} s on {threads} ({:.2}×)",
                 cfg.es.population,
                 eff * 100.0,
-                cfg.inner_cycles,
+                cycles,
                 g1 / gn
             );
             emit(*json, &r, text)

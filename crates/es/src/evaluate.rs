@@ -128,9 +128,7 @@ impl LocalEvaluator {
         make_env: Arc<MakeEnv>,
         threads: usize,
     ) -> Result<Self, rayon::ThreadPoolBuildError> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads.max(1))
-            .build()?;
+        let pool = esrl_nn::subnormal::thread_pool(threads.max(1))?;
         Ok(Self {
             make_env,
             pool: Some(pool),

@@ -53,10 +53,7 @@ fn pipelined_and_sequential_loops_agree_bit_for_bit() {
                 let mut sequential = hybrid_with(algo, EsConfig::default(), 6, ev_s.clone());
                 sequential.set_pipelined(false);
                 assert!(pipelined.pipelined());
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .unwrap();
+                let pool = esrl_nn::subnormal::thread_pool(threads).unwrap();
                 for g in 0..5 {
                     let (a, b) = pool.install(|| (pipelined.step(), sequential.step()));
                     let (a, b) = (a.unwrap(), b.unwrap());

@@ -136,6 +136,7 @@ mod pool;
 mod tensor;
 
 pub mod bench;
+pub mod subnormal;
 
 pub use error::NnError;
 pub use graph::{Gradients, Graph, Var};

@@ -111,9 +111,7 @@ pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
         )));
     }
     let threads = if threads == 0 { cores } else { threads };
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
+    esrl_nn::subnormal::thread_pool(threads)
         .map_err(Error::other)
         .context("starting the thread pool")
 }
