@@ -151,6 +151,11 @@ pub(crate) fn each<T: Send, U: Send>(
     parts.par_iter().zip(each).map(|(p, x)| f(p, x)).collect()
 }
 
+/// `f` on each part, side by side on the rayon pool; the results in part order.
+pub(crate) fn each_part<U: Send>(parts: &[Part], f: impl Fn(&Part) -> U + Sync + Send) -> Vec<U> {
+    parts.par_iter().map(f).collect()
+}
+
 /// Adds the parts' gradients (part order) into the first: the whole batch's gradient.
 pub(crate) fn sum_in_order(mut parts: impl Iterator<Item = Vec<f32>>) -> Vec<f32> {
     let mut total = parts.next().expect("at least one part");

@@ -33,7 +33,7 @@ pub(crate) fn update(agent: &mut Agent, batch: &SequenceBatch) -> Result<UpdateS
     let actor = &agent.actor;
     let (ys, passes) = rayon::join(
         || chunks::each(&parts, eps_next, |p, eps| td_target(agent, p, eps)),
-        || actor_due.then(|| chunks::each(&parts, vec![(); parts.len()], |p, ()| act(actor, p))),
+        || actor_due.then(|| chunks::each_part(&parts, |p| act(actor, p))),
     );
     // Eq. 4: each critic toward y.
     let (critics, opts) = (&mut agent.critics, &mut agent.opt_critics);

@@ -162,13 +162,14 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             batch,
             threads,
             batch_chunks,
+            reps,
             json,
         } => {
             let t = update_ms(
                 *arch,
                 31,
                 *batch as usize,
-                21,
+                *reps as usize,
                 *threads,
                 *batch_chunks as usize,
             )?;

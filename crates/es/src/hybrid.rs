@@ -550,33 +550,38 @@ impl Hybrid {
     /// Runs one generation (module docs): eq. 8, eq. 9, then eqs. 10–11, replacement and
     /// the inner training ([`Hybrid::tell`]), pipelined unless turned off.
     pub fn step(&mut self) -> Result<GenerationReport, AgentError> {
-        let generation = self.ask(); // eq. 8
-        let evaluated = self.evaluate(&generation)?; // eq. 9
+        // Pipelined, individuals 1.. were drawn and rolled out during the last generation's
+        // training (nothing they depend on changes between a tell and the next step; a
+        // restore drops them).
+        let ahead = self
+            .prefetched
+            .take()
+            .filter(|p| p.generation == self.generation);
+        let (generation, evaluated) = match ahead {
+            None => {
+                let generation = self.ask(); // eq. 8
+                let evaluated = self.evaluator.evaluate(&generation)?; // eq. 9
+                (generation, evaluated)
+            }
+            Some(ahead) => {
+                // Eq. 8 and eq. 9 for individual 0 (the RL actor), the rest as prefetched.
+                let first = Generation {
+                    index: self.generation,
+                    policy: self.trainer.agent().policy(),
+                    genomes: self.genomes(self.generation, 0, [self.trainer.agent().genome()]),
+                };
+                let mut evaluated = self.evaluator.evaluate(&first)?;
+                evaluated.extend(ahead.evaluations);
+                let mut generation = first;
+                generation.genomes.extend(ahead.genomes);
+                (generation, evaluated)
+            }
+        };
         self.tell_and_prefetch(&generation, evaluated, self.cfg.pipelined)
     }
 
-    /// Eq. 9 on the evaluator. Pipelined, individuals 1.. were rolled out during the last
-    /// generation's training (nothing they depend on changes between a tell and the next
-    /// step; a restore drops them), so only individual 0 is rolled out here.
-    fn evaluate(&mut self, generation: &Generation) -> Result<Vec<Evaluation>, AgentError> {
-        let ahead = self.prefetched.take().filter(|p| {
-            p.generation == generation.index && generation.genomes.get(1..) == Some(&p.genomes)
-        });
-        let Some(ahead) = ahead else {
-            return self.evaluator.evaluate(generation);
-        };
-        let first = Generation {
-            index: generation.index,
-            policy: generation.policy.clone(),
-            genomes: generation.genomes[..1].to_vec(),
-        };
-        let mut evaluated = self.evaluator.evaluate(&first)?;
-        evaluated.extend(ahead.evaluations);
-        Ok(evaluated)
-    }
-
     /// The inner training cycles; with `prefetch`, beside them on the rayon pool, the
-    /// rollouts of the next generation's perturbations (kept for [`Hybrid::evaluate`]; an
+    /// rollouts of the next generation's perturbations (kept for the next [`Hybrid::step`]; an
     /// evaluation error there surfaces when that generation is evaluated again).
     fn train(&mut self, cycles: usize, prefetch: bool) -> Result<LossMeans, AgentError> {
         if !prefetch || self.cfg.es.population < 2 {

@@ -65,13 +65,13 @@ impl Session {
                 (Either::Hybrid(Box::new(t)), o)
             }
         };
-        let mut session = Session {
+        let (rows, steps) = each!(&training, t => (t.rows(), t.learner().env_steps()));
+        let session = Session {
             training,
-            start: (0, 0, Instant::now()),
+            start: (rows, steps, Instant::now()),
             estimated: false,
             step_budget: cfg.max_env_steps,
         };
-        session.start = (session.rows(), session.env_steps(), Instant::now());
         Ok((session, opening))
     }
 
