@@ -50,13 +50,17 @@ pub fn time_update(
     batch_chunks: usize,
 ) -> Result<UpdateTiming, AgentError> {
     let mut run = RandomData::new(algo, nets, obs_dim, act_dim, batch, 0, batch_chunks)?;
-    for _ in 0..warmup {
-        run.update()?;
-    }
+    // Back to back, as `Trainer::train` runs them: with its helper thread.
     let mut times = Vec::with_capacity(reps.max(1));
-    for _ in 0..reps.max(1) {
-        times.push(run.update()? * 1e3);
-    }
+    crate::train::with_helper(|| {
+        for _ in 0..warmup {
+            run.update()?;
+        }
+        for _ in 0..reps.max(1) {
+            times.push(run.update()? * 1e3);
+        }
+        Ok::<_, AgentError>(())
+    })?;
     let agent = run.agent;
     times.sort_by(f64::total_cmp);
     Ok(UpdateTiming {

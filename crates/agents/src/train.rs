@@ -14,6 +14,7 @@ use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// One training episode's row of `metrics.jsonl`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -224,13 +225,17 @@ impl Trainer {
         self.agent.update(&batch)
     }
 
-    /// `cycles` gradient updates once the warm start is done (none before).
+    /// `cycles` gradient updates once the warm start is done (none before), with a helper
+    /// thread for their parallel steps ([`with_helper`]).
     pub fn train(&mut self, cycles: usize) -> Result<LossMeans, AgentError> {
         let mut losses = LossMeans::default();
-        if self.warmed_up() {
-            for _ in 0..cycles {
-                losses.add(&self.update()?);
-            }
+        if self.warmed_up() && cycles > 0 {
+            with_helper(|| {
+                for _ in 0..cycles {
+                    losses.add(&self.update()?);
+                }
+                Ok::<_, AgentError>(())
+            })?;
         }
         Ok(losses)
     }
@@ -434,5 +439,75 @@ impl Resumable for Trainer {
         buffer: ReplayBuffer,
     ) -> Result<(), AgentError> {
         Trainer::restore(self, state, tensors, buffer)
+    }
+}
+
+/// Runs `work` on this thread and offers the rayon pool one helper: a thread that, once it
+/// has nothing of its own to do (in the hybrid loop: the next generation's rollouts are
+/// done), runs the pool's pending jobs until `work` ends instead of going to sleep. The
+/// parallel steps of an update (the two critics side by side, the TD targets beside the
+/// actor's pass) last a fraction of a millisecond, and a sleeping thread wakes too late for
+/// them: without the helper the recipe's updates ran slower at 2 threads than at one
+/// (`results/speed/README.md`). Scheduling only: no number depends on which thread runs a
+/// step. On a pool of one thread `work` simply runs.
+pub fn with_helper<T: Send>(work: impl FnOnce() -> T + Send) -> T {
+    if rayon::current_num_threads() < 2 {
+        return work();
+    }
+    /// Ends the help when `work` returns or unwinds (a helper left spinning would keep
+    /// `rayon::join` from returning the panic).
+    struct Done<'a>(&'a AtomicBool);
+    impl Drop for Done<'_> {
+        fn drop(&mut self) {
+            self.0.store(false, Ordering::Release);
+        }
+    }
+    let busy = AtomicBool::new(true);
+    let (out, ()) = rayon::join(
+        || {
+            let _done = Done(&busy);
+            work()
+        },
+        || {
+            while busy.load(Ordering::Acquire) {
+                if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                    std::thread::yield_now();
+                }
+            }
+        },
+    );
+    out
+}
+
+#[cfg(test)]
+mod helper_tests {
+    use super::with_helper;
+
+    #[test]
+    fn work_runs_once_and_its_value_comes_back_on_any_pool() {
+        for threads in [1, 2, 3] {
+            let pool = esrl_nn::subnormal::thread_pool(threads).unwrap();
+            let mut runs = 0;
+            let sum: u64 = pool.install(|| {
+                with_helper(|| {
+                    runs += 1;
+                    // Parallel steps inside, as an update has.
+                    (0..1000u64)
+                        .map(|i| rayon::join(|| i, || 2 * i))
+                        .map(|(a, b)| a + b)
+                        .sum()
+                })
+            });
+            assert_eq!((runs, sum), (1, 3 * 999 * 1000 / 2), "{threads} threads");
+        }
+    }
+
+    #[test]
+    fn a_panic_in_the_work_ends_the_help_and_propagates() {
+        let pool = esrl_nn::subnormal::thread_pool(2).unwrap();
+        let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            pool.install(|| with_helper(|| panic!("update failed")))
+        }));
+        assert!(caught.is_err());
     }
 }

@@ -51,7 +51,6 @@ use esrl_sim::MakeEnv;
 use esrl_streams::Stream;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// One generation's row of `metrics.jsonl`.
@@ -595,19 +594,8 @@ impl Hybrid {
         };
         let evaluator = Arc::clone(&self.evaluator);
         let trainer = &mut self.trainer;
-        let training = AtomicBool::new(true);
-        let (losses, evaluated) = rayon::join(
-            || {
-                let losses = trainer.train(cycles);
-                training.store(false, Ordering::Release);
-                losses
-            },
-            || {
-                let evaluated = evaluator.evaluate(&next);
-                help_while(&training);
-                evaluated
-            },
-        );
+        let (losses, evaluated) =
+            rayon::join(|| trainer.train(cycles), || evaluator.evaluate(&next));
         self.prefetched = evaluated.ok().map(|evaluations| Prefetched {
             generation: next.index,
             genomes: next.genomes,
@@ -766,18 +754,4 @@ impl Resumable for Hybrid {
 /// Position of the best of `fitness` (NaN worst, ties to the lowest index).
 pub fn best_index(fitness: &[f64]) -> Option<usize> {
     rank(fitness).first().copied()
-}
-
-/// Runs the pool's pending work (the parallel steps of the update training beside) until
-/// `busy` is false, yielding the core when there is none. A thread whose rollouts are done
-/// would otherwise go to sleep, and a sleeping thread wakes too late for an update's short
-/// parallel steps: the recipe's late generations ran 1.14× faster at 2 threads with this
-/// help than without it (`results/speed`). On a pool of one thread the training has finished
-/// before this runs.
-fn help_while(busy: &AtomicBool) {
-    while busy.load(Ordering::Acquire) {
-        if rayon::yield_now() != Some(rayon::Yield::Executed) {
-            std::thread::yield_now();
-        }
-    }
 }
