@@ -535,11 +535,13 @@ impl TrainConfig {
     }
 }
 
-/// The default command's time (`esrl train es-sac`, preset `walking`): measured on the 2-core
-/// AMD EPYC machine of `results/speed/` (80,000 steps in 39.5 s at 2 threads, so 4 M steps
-/// at the same rate; two full runs side by side at one thread each took 72–73 min).
+/// The default command's time (`esrl train es-sac`, preset `walking`), from the step rates
+/// measured on the two 2-core machines of `results/speed/`: an AMD EPYC (80,000 steps in
+/// 39.5 s at 2 threads, so 4 M steps in about 33 min; two full runs side by side at one
+/// thread each took 72–73 min) and an Intel Xeon (1,400–1,630 steps/s at 2 threads, early
+/// and late in a run: 42–48 min).
 pub const TIME_WALKING: &str =
-    "about 33 min at --threads 2 on an idle 2-core machine; 72 min of one core each when two run side by side";
+    "about 33-48 min at --threads 2 on an idle 2-core machine; 72 min of one core each when two run side by side";
 /// `--preset quick` for ES-SAC (52 s measured at 2 threads, `results/speed/`).
 pub const TIME_QUICK: &str = "about 1 min at --threads 2 (52 s measured)";
 /// `--preset paper` for an ES agent: the paper's 1500 generations.
