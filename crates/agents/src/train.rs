@@ -276,7 +276,8 @@ impl Trainer {
             losses: LossMeans::default(),
             q0: f64::NAN,
         };
-        let end = run_episode(env, env_seed, None, &mut learning)?;
+        // The updates come every few steps inside the episode: the helper stays for all of it.
+        let end = with_helper(|| run_episode(env, env_seed, None, &mut learning))?;
         let (losses, q0) = (learning.losses, learning.q0);
         self.buffer.end_episode();
         let mut losses = losses;
