@@ -15,9 +15,10 @@
 //! read as 0. TensorFlow and XLA run their CPU kernels this way by default, PyTorch offers it
 //! as `torch.set_flush_denormal(True)`. Results stay deterministic (the same seed gives the
 //! same bits at any thread count, on one kind of processor) because every thread of every
-//! pool esrl builds runs in the mode ([`thread_pool`], [`init_global_pool`]), and the entry
-//! points that may run on a caller's thread (an update, a rollout, an evaluation episode)
-//! switch it on for their own duration with [`flushing`], restoring the caller's mode after.
+//! pool esrl builds runs in the mode ([`thread_pool`], [`init_global_pool`]), and the two
+//! entry points that may run on a caller's thread (`Agent::update` and `rollout` in
+//! `esrl-agents`) switch it on for their own duration with [`flushing`], restoring the
+//! caller's mode after. Evaluation episodes run on the pools.
 
 /// Runs `f` with subnormals flushed to zero on this thread, then restores the thread's mode.
 pub fn flushing<T>(f: impl FnOnce() -> T) -> T {
