@@ -237,7 +237,8 @@ def test_report_refuses_to_pool_different_configurations(tmp_path: Path) -> None
 def test_study_and_robustness_figures(tmp_path) -> None:
     """The study figures from a report.json and the robustness figure from a card."""
     pytest.importorskip("matplotlib")
-    from esrl_rs.study import performance_profile, robustness_figure, study_figures
+    from esrl_rs.study import (check_series, checks_figure, performance_profile,
+                               robustness_figure, study_figures)
 
     np.testing.assert_array_equal(performance_profile([1.0, 2.0, 3.0], np.array([0.0, 1.5, 3.0])),
                                   [1.0, 2 / 3, 0.0])
@@ -251,6 +252,26 @@ def test_study_and_robustness_figures(tmp_path) -> None:
     }))
     files = study_figures(study, tmp_path / "out", dpi=40)
     assert [f.name for f in files] == ["study_intervals.png", "study_profiles.png"]
+    with pytest.raises(ValueError, match="no run with a checks.jsonl"):
+        checks_figure(study, tmp_path / "out")
+    # Two checks of one run: the classes of both, zero where a check had none.
+    run = study / "records" / "a-s1"
+    run.mkdir(parents=True)
+    check = {"starts": 4, "at_bar": False}
+    (run / "checks.jsonl").write_text("\n".join(json.dumps(c) for c in [
+        {**check, "env_steps": 1000, "finished": 0, "classes": {"fall": 3, "walk": 1}},
+        {**check, "env_steps": 5000, "finished": 4, "at_bar": True,
+         "classes": {"walk": 3, "shuffle": 1}}]) + "\n")
+    s = check_series(run / "checks.jsonl")
+    np.testing.assert_array_equal(s["env_steps"], [1000, 5000])
+    np.testing.assert_array_equal(s["finished"], [0, 4])
+    np.testing.assert_array_equal(s["at_bar"], [False, True])
+    assert list(s["classes"]) == ["walk", "shuffle", "fall"]
+    np.testing.assert_array_equal(s["classes"]["shuffle"], [0, 1])
+    np.testing.assert_array_equal(s["classes"]["fall"], [3, 0])
+    files = study_figures(study, tmp_path / "out", dpi=40)
+    assert [f.name for f in files] == ["study_intervals.png", "study_profiles.png",
+                                       "study_checks.png"]
     card = tmp_path / "eval.json"
     row = {"episodes": 4, "survived": 2, "finished": 1, "speed": 1.0, "classes": {}}
     (card).write_text(json.dumps({"run": "r", "robustness": [

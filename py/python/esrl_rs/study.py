@@ -6,6 +6,11 @@
   Best-Win-50: for every score τ, the share of an arm's runs that score above it
   (``study_profiles.png``; Agarwal et al. 2021, "Deep RL at the Edge of the Statistical
   Precipice", Fig. 3, whose ``rliable`` draws the same curve with bootstrap bands).
+- :func:`checks_figure`: from each run's ``checks.jsonl`` (``DIR/records/<run>/``), what the
+  walking checks found during training, one panel per run: the episodes of each gait class
+  stacked, the starts past the 50 m line, and the first check at the walking bar
+  (``study_checks.png``): whether a seed's policy walked before it learnt to finish, and
+  what it turned into.
 - :func:`robustness_figure`: from an ``eval.json`` with a ``robustness`` card (``esrl eval
   POLICY --robustness``), the share of episodes that stayed up against each disturbance's
   magnitude (``robustness.png``).
@@ -22,7 +27,8 @@ from typing import Any, Dict, List, Union
 
 import numpy as np
 
-__all__ = ["performance_profile", "robustness_figure", "study_figures"]
+__all__ = ["check_series", "checks_figure", "performance_profile", "robustness_figure",
+           "study_figures"]
 
 PathLike = Union[str, Path]
 
@@ -31,6 +37,77 @@ def performance_profile(scores: List[float], taus: np.ndarray) -> np.ndarray:
     """The share of ``scores`` strictly above each τ of ``taus`` (a performance profile)."""
     s = np.asarray(scores, dtype=float)
     return np.array([(s > t).mean() if s.size else np.nan for t in taus])
+
+
+#: Gait classes in the order they are stacked, with their colours.
+CLASS_COLORS = {"walk": "tab:green", "shuffle": "tab:olive", "run": "tab:blue", "hop": "tab:purple",
+                "stand": "tab:gray", "fall": "tab:red"}
+
+
+def check_series(checks_jsonl: PathLike) -> Dict[str, Any]:
+    """The checks of one run as arrays over training: ``env_steps``, ``starts``, ``finished``,
+    ``at_bar`` (bool) and ``classes`` (class → episodes per check, every class of any check,
+    zero where a check had none), in the order of the file."""
+    rows = [json.loads(line) for line in Path(checks_jsonl).read_text(encoding="utf-8").splitlines()
+            if line.strip()]
+    names = sorted({c for r in rows for c in r["classes"]},
+                   key=lambda c: (list(CLASS_COLORS).index(c) if c in CLASS_COLORS else 99, c))
+    return {
+        "env_steps": np.array([r["env_steps"] for r in rows], dtype=float),
+        "starts": np.array([r["starts"] for r in rows], dtype=float),
+        "finished": np.array([r["finished"] for r in rows], dtype=float),
+        "at_bar": np.array([bool(r["at_bar"]) for r in rows]),
+        "classes": {c: np.array([r["classes"].get(c, 0) for r in rows], dtype=float) for c in names},
+    }
+
+
+def checks_figure(study_dir: PathLike, out: PathLike, dpi: int = 150) -> Path:
+    """One panel per run of the study with a ``checks.jsonl`` (module docs); raises
+    ``ValueError`` when no record has one."""
+    records = Path(study_dir) / "records"
+    runs = sorted((d for d in records.iterdir() if (d / "checks.jsonl").is_file()),
+                  key=lambda d: (d.name.rsplit("-s", 1)[0], int(d.name.rsplit("-s", 1)[1])
+                                 if d.name.rsplit("-s", 1)[-1].isdigit() else 0)) \
+        if records.is_dir() else []
+    if not runs:
+        raise ValueError(f"{records} holds no run with a checks.jsonl (a study with a [check])")
+    plt = _plt()
+    cols = min(5, len(runs))
+    nrows = (len(runs) + cols - 1) // cols
+    fig, axes = plt.subplots(nrows, cols, figsize=(2.8 * cols, 2.2 * nrows + 0.6), squeeze=False,
+                             sharey=True)
+    for ax, run in zip(axes.flat, runs):
+        s = check_series(run / "checks.jsonl")
+        x = s["env_steps"] / 1e6
+        ax.stackplot(x, *s["classes"].values(), step="post", labels=list(s["classes"]),
+                     colors=[CLASS_COLORS.get(c, "black") for c in s["classes"]], alpha=0.55)
+        ax.step(x, s["finished"], where="post", color="black", lw=1.0, label="past 50 m")
+        if s["at_bar"].any():
+            ax.axvline(x[np.argmax(s["at_bar"])], color="black", ls=":", lw=1.0,
+                       label="first at the bar")
+        ax.set_title(run.name, fontsize=9)
+        ax.set_ylim(0, float(s["starts"].max()) if len(x) else 1)
+        ax.set_xlabel("env steps (M)", fontsize=8)
+        ax.tick_params(labelsize=7)
+    for ax in list(axes.flat)[len(runs):]:
+        ax.axis("off")
+    for ax in axes[:, 0]:
+        ax.set_ylabel("starts of a check", fontsize=8)
+    handles, labels = {}, {}
+    for ax in axes.flat:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(lab, h)
+    fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=len(handles),
+               fontsize=7, frameon=False)
+    fig.suptitle("walking checks during training: episodes by gait class (stacked), starts past "
+                 "the 50 m line", fontsize=9)
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "study_checks.png"
+    fig.savefig(path, dpi=dpi)
+    plt.close(fig)
+    return path
 
 
 def _plt() -> Any:
@@ -43,7 +120,8 @@ def _plt() -> Any:
 
 
 def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Path]:
-    """The figures of a study folder (module docs) into ``out``; returns their paths."""
+    """The figures of a study folder (module docs) into ``out``, the checks figure when its
+    records have checks; returns their paths."""
     report = json.loads((Path(study_dir) / "report.json").read_text(encoding="utf-8"))
     arms = report["arms"]
     runs = report["runs"]
@@ -92,6 +170,9 @@ def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Pa
     fig.savefig(path, dpi=dpi)
     plt.close(fig)
     files.append(path)
+    records = Path(study_dir) / "records"
+    if records.is_dir() and any((d / "checks.jsonl").is_file() for d in records.iterdir()):
+        files.append(checks_figure(study_dir, out, dpi=dpi))
     return files
 
 
