@@ -212,9 +212,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             let upd = update_ms(arch, 31, batch, 3, 1, chunks)?.ms_per_update;
             let upd_n = update_ms(arch, 31, batch, 3, *threads, chunks)?.ms_per_update;
             // The inner updates of a generation that collected `steps` env steps.
-            let cycles = cfg
-                .updates_per_step
-                .map_or(cfg.inner_cycles, |r| (r * steps as f64).round() as usize);
+            let cycles = build::hybrid_config(&cfg).inner_cycles_for(steps as usize);
             let train_s = upd * cycles as f64 / 1e3;
             let (g1, whole) = whole_generation_s(*preset, 1, None)?;
             let (gn, _) = whole_generation_s(*preset, *threads, Some(whole))?;

@@ -152,11 +152,7 @@ pub fn learner_with(
         None
     };
     Ok(if cfg.agent.is_hybrid() {
-        let loop_cfg = HybridConfig {
-            updates_per_step: cfg.updates_per_step,
-            ..HybridConfig::new(cfg.es.clone(), cfg.inner_cycles)
-        };
-        let mut hybrid = Hybrid::new(agent, loop_cfg, cfg.seed, evaluator);
+        let mut hybrid = Hybrid::new(agent, hybrid_config(cfg), cfg.seed, evaluator);
         hybrid.trainer_mut().set_mirror(mirror);
         AnyLearner::Hybrid(Box::new(hybrid))
     } else {
@@ -164,6 +160,14 @@ pub fn learner_with(
         trainer.set_mirror(mirror);
         AnyLearner::Plain(Box::new(trainer))
     })
+}
+
+/// The hybrid loop's settings of a run: its ES, inner cycles and update ratio.
+pub fn hybrid_config(cfg: &TrainConfig) -> HybridConfig {
+    HybridConfig {
+        updates_per_step: cfg.updates_per_step,
+        ..HybridConfig::new(cfg.es.clone(), cfg.inner_cycles)
+    }
 }
 
 /// The worker side of a run's remote evaluation: rolls out genomes of the run configured by
