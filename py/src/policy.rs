@@ -24,9 +24,11 @@ fn check_exists(path: &Path) -> PyResult<()> {
             path.display()
         )));
     }
-    // A run folder (a checkpoint folder also keeps a copy of config.toml, beside its weights).
-    let run_folder =
-        path.join("config.toml").is_file() && !path.join("agent.safetensors").is_file();
+    // A run folder (a checkpoint folder also keeps a copy of config.toml, beside its weights,
+    // and so does a policy folder that keeps the actor alone, a study record's `policy/`).
+    let run_folder = path.join("config.toml").is_file()
+        && !path.join("agent.safetensors").is_file()
+        && !path.join("actor.safetensors").is_file();
     if run_folder && esrl_run::checkpoint::find(path).is_none() {
         return Err(not_found(format!(
             "{} has no complete checkpoint (checkpoint/ with state.json and agent.safetensors): \
@@ -185,6 +187,12 @@ impl PolicyCore {
     /// Q₀: the critics' estimate (minimum) at `obs` for the deterministic action, from a zero
     /// recurrent state.
     fn q0(&self, obs: PyArrayLike1<'_, f32, AllowTypeChange>) -> PyResult<f64> {
+        if !esrl_run::checkpoint::has_critics(&self.loaded.checkpoint) {
+            return Err(value_error(format!(
+                "{} keeps the actor alone (no agent.safetensors): it has no critics to give Q0",
+                self.loaded.checkpoint.display()
+            )));
+        }
         let obs: Vec<f32> = obs.as_array().iter().copied().collect();
         self.check_obs(&obs)?;
         Ok(self.loaded.agent.q0(&obs))

@@ -62,6 +62,36 @@ def test_policy_matches_esrl_eval(cli_train: Callable[..., Path],
                                            theirs["gait"]["mean_abs_power"], rtol=1e-12)
 
 
+def test_policy_folder_with_the_actor_alone(cli_train: Callable[..., Path],
+                                           tmp_path: Path) -> None:
+    """A study record's `policy/` (actor.safetensors and config.toml, no critics) loads and
+    acts as the checkpoint it came from; it has no Q0 to give."""
+    import shutil
+    full = esrl_rs.load_policy(cli_train("es-sac", *WALK))
+    folder = tmp_path / "policy"
+    folder.mkdir()
+    for name in ("actor.safetensors", "config.toml"):
+        shutil.copy(Path(full.checkpoint) / name, folder / name)
+    alone = esrl_rs.load_policy(folder)
+    assert Path(alone.checkpoint) == folder
+    env = full.make_env()
+    obs, _ = env.reset(seed=1)
+    full.reset()
+    alone.reset()
+    for _ in range(20):
+        action = full.act(obs)
+        np.testing.assert_array_equal(alone.act(obs), action)
+        obs, _, terminated, truncated, _ = env.step(action)
+        if terminated or truncated:
+            break
+    with pytest.raises(ValueError, match="actor alone"):
+        alone.q0(obs)
+    assert full.q0(obs) == full.q0(obs)
+    ours, theirs = alone.rollout(3), full.rollout(3)
+    assert ours["return"] == theirs["return"] and ours["length"] == theirs["length"]
+    assert ours["q0"] is None and theirs["q0"] is not None
+
+
 def test_walk_policy(cli_train: Callable[..., Path]) -> None:
     policy = esrl_rs.load_policy(cli_train("es-sac", *WALK) / "checkpoint")
     assert policy.agent == "es-sac" and policy.env == "walk"

@@ -25,8 +25,10 @@ class Policy:
 
     @classmethod
     def load(cls, path: Union[str, "os.PathLike[str]"]) -> "Policy":
-        """Loads a run folder (its newest complete checkpoint) or a checkpoint folder inside
-        one. Raises ``FileNotFoundError`` (no folder, no checkpoint) or ``ValueError`` (a
+        """Loads a run folder (its newest complete checkpoint), a checkpoint folder inside
+        one, or a policy folder that keeps the actor alone (a study record's ``policy/``:
+        ``actor.safetensors`` and its ``config.toml``; it has no critics, so :meth:`q0`
+        raises ``ValueError`` there). Raises ``FileNotFoundError`` (no folder, no checkpoint) or ``ValueError`` (a
         config or checkpoint that cannot be used)."""
         return cls(PolicyCore.load(os.fspath(path)))
 
@@ -75,7 +77,8 @@ class Policy:
         return self.act(obs)
 
     def q0(self, obs: Any) -> float:
-        """The critics' estimate (minimum) at ``obs`` for the deterministic action."""
+        """The critics' estimate (minimum) at ``obs`` for the deterministic action
+        (``ValueError`` for a policy folder that keeps the actor alone)."""
         return self._core.q0(np.asarray(obs, dtype=np.float32).reshape(-1))
 
     def make_env(self) -> Any:
