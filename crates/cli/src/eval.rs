@@ -383,5 +383,23 @@ pub fn render_table(report: &EvalReport) -> String {
             ));
         }
     }
+    out.push_str(&terms_line(report));
     out
+}
+
+/// The mean return split by reward term, largest share first, with each term per step:
+/// `return by term (per step): forward 2408.1 (1.003), alive 600.0 (0.250), …`.
+fn terms_line(report: &EvalReport) -> String {
+    let m = &report.mean;
+    if m.return_terms.is_empty() {
+        return String::new();
+    }
+    let mut terms: Vec<(&String, f64)> = m.return_terms.iter().map(|(n, v)| (n, *v)).collect();
+    terms.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+    let per_step = |v: f64| v / m.length.max(1.0);
+    let cells: Vec<String> = terms
+        .iter()
+        .map(|(n, v)| format!("{n} {} ({:.3})", format_number(*v), per_step(*v)))
+        .collect();
+    format!("return by term (per step): {}\n", cells.join(", "))
 }

@@ -81,6 +81,18 @@ fn eval_json_has_every_field_and_agrees_with_its_trace() {
         assert!(e["q0"].as_f64().unwrap().is_finite());
         let len = e["length"].as_u64().unwrap() as usize;
         assert!(len > 0);
+        // The return split by reward term: the walking task's terms, summing to the return
+        // up to the single-precision rounding of each step's reward.
+        let terms = e["return_terms"].as_object().unwrap();
+        for key in ["forward", "alive", "power"] {
+            assert!(
+                terms.contains_key(key),
+                "return_terms.{key} missing: {terms:?}"
+            );
+        }
+        let total: f64 = terms.values().map(|v| v.as_f64().unwrap()).sum();
+        let ret = e["return"].as_f64().unwrap();
+        assert!((total - ret).abs() <= 1e-5 * len as f64, "{total} vs {ret}");
         let g = &e["gait"];
         for key in GAIT_KEYS {
             assert!(g.get(key).is_some(), "gait.{key} missing: {g}");
@@ -205,6 +217,15 @@ fn eval_json_has_every_field_and_agrees_with_its_trace() {
         .map(|e| e["gait"]["distance"].as_f64().unwrap())
         .collect();
     assert!((m["gait"]["distance"].as_f64().unwrap() - mean(&d)).abs() < 1e-9);
+    let forward: Vec<f64> = episodes
+        .iter()
+        .map(|e| e["return_terms"]["forward"].as_f64().unwrap())
+        .collect();
+    assert!((m["return_terms"]["forward"].as_f64().unwrap() - mean(&forward)).abs() < 1e-9);
+    assert!(
+        table.contains("return by term (per step): "),
+        "the table names what pays:\n{table}"
+    );
 
     // The checkpoint folder gives the same numbers; --json prints the file's object.
     let out = ok(&[

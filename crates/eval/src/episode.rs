@@ -1,6 +1,6 @@
 //! One evaluation episode: the episode loop of `esrl_sim` with what evaluation keeps — the
-//! first observation (for Q₀) and, on the walking task, every step's gait sample and the
-//! robot's side view.
+//! first observation (for Q₀), the return split by reward term and, on the walking task,
+//! every step's gait sample and the robot's side view.
 
 use crate::stick::{StickFigure, StickRecorder, DEFAULT_INTERVAL};
 use esrl_metrics::{gait_metrics, GaitMetrics, GaitTrace};
@@ -24,6 +24,10 @@ pub struct Rollout {
     pub truncated: bool,
     /// The first observation (for Q₀).
     pub first_obs: Vec<f32>,
+    /// The return split by reward term: each term summed over the episode's steps (in f64),
+    /// in the environment's order. The terms of a step sum to its reward, so these sum to
+    /// [`Rollout::ret`] up to the rounding of the single-precision rewards.
+    pub return_terms: Vec<(&'static str, f64)>,
 }
 
 /// The hook of [`rollout`]: keeps the first observation, acts, and hands every step on.
@@ -31,6 +35,7 @@ struct Observe<A, S, E: ?Sized> {
     act: A,
     on_step: S,
     first_obs: Vec<f32>,
+    return_terms: Vec<(&'static str, f64)>,
     env: PhantomData<fn(&E)>,
 }
 
@@ -52,6 +57,12 @@ where
     }
 
     fn step(&mut self, env: &E, _: &[f32], action: &[f32], step: &Step) -> Result<()> {
+        for &(name, value) in &step.info.reward_terms {
+            match self.return_terms.iter_mut().find(|(n, _)| *n == name) {
+                Some((_, sum)) => *sum += f64::from(value),
+                None => self.return_terms.push((name, f64::from(value))),
+            }
+        }
         (self.on_step)(env, action, step)
     }
 }
@@ -71,6 +82,7 @@ pub fn rollout<E: Env + ?Sized>(
         act,
         on_step,
         first_obs: Vec::new(),
+        return_terms: Vec::new(),
         env: PhantomData,
     };
     let end = run_episode(env, seed, Some(limit), &mut hook)?;
@@ -81,6 +93,7 @@ pub fn rollout<E: Env + ?Sized>(
         terminated: end.terminated,
         truncated: end.truncated,
         first_obs: hook.first_obs,
+        return_terms: hook.return_terms,
     })
 }
 

@@ -12,7 +12,7 @@
 //! {"run": "...", "agent": "es-sac", "env": "walk", "checkpoint": "...", "seed": S,
 //!  "track_length": 50.0,
 //!  "episodes": [{"seed": S, "return": .., "length": .., "q0": .., "terminated": ..,
-//!                "truncated": ..,
+//!                "truncated": .., "return_terms": {"alive": .., "forward": .., ..},
 //!                "gait": {GaitMetrics with "cycle": {GaitCycle}, "joints": [{JointMotion}]}
 //!                        | null,
 //!                "trace": {"time": [..], "x": [..], "y": [..], "z_error": [..],
@@ -20,8 +20,12 @@
 //!                          "joint_names": [..], "joint_limits": [[lo, hi] | null, ..],
 //!                          "joint_angle": [[..], ..], "stick": {StickFigure}}}],
 //!  "mean": {"episodes": K, "return": .., "return_sd": .. | null, "length": .., "q0": ..,
-//!           "falls": n, "finished": n, "gait": {GaitMetrics} | null}}
+//!           "falls": n, "finished": n, "return_terms": {..}, "gait": {GaitMetrics} | null}}
 //! ```
+//!
+//! `return_terms` splits the return by the environment's reward terms (`StepInfo::reward_terms`
+//! summed over the episode): what pays a policy, e.g. how much of a shuffle's return is
+//! speed and how much the gait clock. `mean.return_terms` is their mean over the episodes.
 //!
 //! `mean.gait` has the shape of one episode's gait metrics: every number is the mean over the
 //! episodes (per actuator and per foot element-wise); `track_time` is the mean track time when
@@ -54,6 +58,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// File name of the evaluation inside a run folder.
@@ -148,6 +153,10 @@ pub struct EpisodeEval {
     pub terminated: bool,
     /// Ended by the time limit.
     pub truncated: bool,
+    /// The return split by reward term (name → the term summed over the episode; they sum
+    /// to `return` up to single-precision rounding): what pays the policy.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub return_terms: BTreeMap<String, f64>,
     /// Gait metrics (walking runs), else `null`.
     pub gait: Option<GaitMetrics>,
     /// The torso's path (walking runs), else absent.
@@ -173,6 +182,10 @@ pub struct EvalMean {
     pub falls: usize,
     /// Episodes that reached the end of the track.
     pub finished: usize,
+    /// The mean over the episodes of each reward term's share of the return (episodes
+    /// without a term count 0 for it).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub return_terms: BTreeMap<String, f64>,
     /// Mean gait metrics (walking runs), else `null`.
     pub gait: Option<GaitMetrics>,
 }
@@ -356,6 +369,11 @@ fn evaluate_episode(loaded: &LoadedRun, seed: u64, record: Option<&Path>) -> Res
             .then(|| loaded.agent.q0(&rollout.first_obs)),
         terminated: rollout.terminated,
         truncated: rollout.truncated,
+        return_terms: rollout
+            .return_terms
+            .iter()
+            .map(|&(name, sum)| (name.to_string(), sum))
+            .collect(),
         gait,
         trace,
     })
@@ -438,8 +456,22 @@ fn aggregate(episodes: &[EpisodeEval]) -> Result<EvalMean> {
             .map(|q| mean_of(q.into_iter())),
         falls: gaits.iter().filter(|g| g.fell).count(),
         finished: gaits.iter().filter(|g| g.track_time.is_some()).count(),
+        return_terms: mean_terms(episodes),
         gait: mean_gait(&gaits),
     })
+}
+
+/// Each reward term's mean over `episodes` (0 where an episode lacks it).
+fn mean_terms(episodes: &[EpisodeEval]) -> BTreeMap<String, f64> {
+    let mut sums = BTreeMap::new();
+    for e in episodes {
+        for (name, value) in &e.return_terms {
+            *sums.entry(name.clone()).or_insert(0.0) += value;
+        }
+    }
+    let n = episodes.len().max(1) as f64;
+    sums.values_mut().for_each(|v| *v /= n);
+    sums
 }
 
 /// Evaluates and writes `RUN/eval.json` atomically; returns the report.
