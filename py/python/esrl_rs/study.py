@@ -74,7 +74,8 @@ def checks_figure(study_dir: PathLike, out: PathLike, dpi: int = 150) -> Path:
     plt = _plt()
     cols = min(5, len(runs))
     nrows = (len(runs) + cols - 1) // cols
-    fig, axes = plt.subplots(nrows, cols, figsize=(2.8 * cols, 2.2 * nrows + 0.6), squeeze=False,
+    fig, axes = plt.subplots(nrows, cols, figsize=(max(2.8 * cols, 8.0), 2.2 * nrows + 0.6),
+                             squeeze=False,
                              sharey=True)
     for ax, run in zip(axes.flat, runs):
         s = check_series(run / "checks.jsonl")
