@@ -1,5 +1,6 @@
 //! Contract: the committed results are studies whose reports regenerate from their committed
-//! records. For every study folder under `results/` with records, `esrl study report` on a
+//! records. For every study folder under `results/` with records (found by walking the
+//! folder: a `study.toml` beside a `records/`), `esrl study report` on a
 //! copy of its `study.toml`, `configs/` and `records/` writes exactly the committed
 //! `report.md`, `report.csv` and `report.json`.
 
@@ -8,16 +9,18 @@ mod common;
 use common::ok_output as ok;
 use std::path::{Path, PathBuf};
 
-const STUDIES: [&str; 8] = [
-    "results/seeds",
-    "results/walking/compare",
-    "results/walking/compare-equal-gen",
-    "results/walking/seeds",
-    "results/walking/levers",
-    "results/walking/screens",
-    "results/compare-quick-g150",
-    "results/compare-quick-equal-steps",
-];
+/// Every folder under `dir` (recursively) with a `study.toml` and a `records/` folder.
+fn studies_with_records(dir: &Path, found: &mut Vec<PathBuf>) {
+    if dir.join("study.toml").is_file() && dir.join("records").is_dir() {
+        found.push(dir.to_path_buf());
+    }
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let entry = entry.unwrap();
+        if entry.file_type().unwrap().is_dir() && entry.file_name() != "records" {
+            studies_with_records(&entry.path(), found);
+        }
+    }
+}
 
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
@@ -35,9 +38,18 @@ fn copy_dir(from: &Path, to: &Path) {
 #[test]
 fn every_committed_study_report_regenerates_from_its_records() {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let mut studies = Vec::new();
+    studies_with_records(&root.join("results"), &mut studies);
+    studies.sort();
+    for known in ["results/seeds", "results/walking/compare", "results/levers"] {
+        assert!(
+            studies.contains(&root.join(known)),
+            "{known} was not found among {studies:?}"
+        );
+    }
     let tmp = tempfile::tempdir().unwrap();
-    for (k, study) in STUDIES.iter().enumerate() {
-        let from = root.join(study);
+    for (k, from) in studies.iter().enumerate() {
+        let study = from.strip_prefix(&root).unwrap().display();
         let to = tmp.path().join(k.to_string());
         std::fs::create_dir_all(&to).unwrap();
         std::fs::copy(from.join("study.toml"), to.join("study.toml")).unwrap();
