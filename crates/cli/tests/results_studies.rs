@@ -1,8 +1,8 @@
 //! Contract: the committed results are studies whose reports regenerate from their committed
 //! records. For every study folder under `results/` with records (found by walking the
-//! folder: a `study.toml` beside a `records/`), `esrl study report` on a
-//! copy of its `study.toml`, `configs/` and `records/` writes exactly the committed
-//! `report.md`, `report.csv` and `report.json`.
+//! folder: a `study.toml` beside a `records/`), `esrl study report` on a copy of its
+//! `study.toml` (with the arms' config files beside it), `configs/` and `records/` writes
+//! exactly the committed `report.md`, `report.csv` and `report.json`.
 
 mod common;
 
@@ -52,7 +52,13 @@ fn every_committed_study_report_regenerates_from_its_records() {
         let study = from.strip_prefix(&root).unwrap().display();
         let to = tmp.path().join(k.to_string());
         std::fs::create_dir_all(&to).unwrap();
-        std::fs::copy(from.join("study.toml"), to.join("study.toml")).unwrap();
+        // The study file and the arms' config files beside it.
+        for entry in std::fs::read_dir(from).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_file() && path.extension().is_some_and(|e| e == "toml") {
+                std::fs::copy(&path, to.join(path.file_name().unwrap())).unwrap();
+            }
+        }
         for dir in ["configs", "records"] {
             if from.join(dir).is_dir() {
                 copy_dir(&from.join(dir), &to.join(dir));
