@@ -66,9 +66,7 @@ def checks_figure(study_dir: PathLike, out: PathLike, dpi: int = 150) -> Path:
     ``ValueError`` when no record has one."""
     records = Path(study_dir) / "records"
     runs = sorted((d for d in records.iterdir() if (d / "checks.jsonl").is_file()),
-                  key=lambda d: (d.name.rsplit("-s", 1)[0], int(d.name.rsplit("-s", 1)[1])
-                                 if d.name.rsplit("-s", 1)[-1].isdigit() else 0)) \
-        if records.is_dir() else []
+                  key=_run_order) if records.is_dir() else []
     if not runs:
         raise ValueError(f"{records} holds no run with a checks.jsonl (a study with a [check])")
     plt = _plt()
@@ -94,7 +92,7 @@ def checks_figure(study_dir: PathLike, out: PathLike, dpi: int = 150) -> Path:
         ax.axis("off")
     for ax in axes[:, 0]:
         ax.set_ylabel("starts of a check", fontsize=8)
-    handles, labels = {}, {}
+    handles: Dict[str, Any] = {}
     for ax in axes.flat:
         for h, lab in zip(*ax.get_legend_handles_labels()):
             handles.setdefault(lab, h)
@@ -103,12 +101,23 @@ def checks_figure(study_dir: PathLike, out: PathLike, dpi: int = 150) -> Path:
     fig.suptitle("walking checks during training: episodes by gait class (stacked), starts past "
                  "the 50 m line", fontsize=9)
     fig.tight_layout(rect=(0, 0.06, 1, 1))
+    return _save(fig, out, "study_checks.png", dpi)
+
+
+def _save(fig: Any, out: PathLike, name: str, dpi: int) -> Path:
+    """Writes ``fig`` to ``out/name`` (creating ``out``), closes it, returns the path."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    path = out / "study_checks.png"
+    path = out / name
     fig.savefig(path, dpi=dpi)
-    plt.close(fig)
+    _plt().close(fig)
     return path
+
+
+def _run_order(run: Path) -> Any:
+    """Sorts record folders ``<arm>-s<seed>`` by arm, then by seed as a number."""
+    arm, _, seed = run.name.rpartition("-s")
+    return (arm, int(seed)) if seed.isdigit() else (run.name, 0)
 
 
 def _plt() -> Any:
@@ -126,8 +135,6 @@ def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Pa
     report = json.loads((Path(study_dir) / "report.json").read_text(encoding="utf-8"))
     arms = report["arms"]
     runs = report["runs"]
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     plt = _plt()
     files = []
 
@@ -149,10 +156,7 @@ def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Pa
     ax1.set_xlabel("runs at the walking bar (%), Wilson 95 % interval")
     ax2.set_xlabel("IQM of Best-Win-50, bootstrap 95 % interval")
     fig.tight_layout()
-    path = out / "study_intervals.png"
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    files.append(path)
+    files.append(_save(fig, out, "study_intervals.png", dpi))
 
     fig, ax = plt.subplots(figsize=(5.5, 3.6))
     all_scores = [r["best_win_50"] for r in runs]
@@ -167,10 +171,7 @@ def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Pa
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
-    path = out / "study_profiles.png"
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    files.append(path)
+    files.append(_save(fig, out, "study_profiles.png", dpi))
     records = Path(study_dir) / "records"
     if records.is_dir() and any((d / "checks.jsonl").is_file() for d in records.iterdir()):
         files.append(checks_figure(study_dir, out, dpi=dpi))
@@ -218,9 +219,4 @@ def robustness_figure(eval_json: PathLike, out: PathLike, dpi: int = 150) -> Pat
     fig.suptitle(f"{report.get('run', '')}: share of {rows[0]['episodes']} episodes, the "
                  "undisturbed task at the nominal value", fontsize=9)
     fig.tight_layout()
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    path = out / "robustness.png"
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
-    return path
+    return _save(fig, out, "robustness.png", dpi)
