@@ -15,9 +15,19 @@
 //! `walk` (the bar the walking recipe is judged by: `walk` in most episodes, 50 m from ≥ 8 of
 //! 10 starts).
 //!
+//! **Confirming a walk** ([`CheckConfig::confirm_starts`], off by default). Ten starts are a
+//! small sample: a policy that finishes 8 of 10 may finish 14 of 20 fresh ones. With
+//! `confirm_starts = m`, a policy at the bar on its `starts` is run from `m` more (reset seeds
+//! of [`Stream::CheckReset`]`(starts + j)`, clock phases `(j + ¼) / m`, between the first
+//! ones' when `m = starts`), and the bar is judged again on all `starts + m` episodes; only a
+//! policy that still meets it counts as at the bar (for `RUN/best/`, the first walk and
+//! `--until walk`). A policy below the bar on its first starts costs nothing more.
+//!
 //! **Choosing the kept policy.** Checks are ranked by ([`CheckResult::score`]): at the bar
-//! first, then starts finished, then fewer falls, then episodes classified `walk`, then mean
-//! distance. With a check configured, `RUN/best/` holds the best-ranked policy checked so far
+//! first, then the share of starts finished, then fewer falls (as a share), then the share
+//! classified `walk`, then mean distance (shares, so a confirmed check of `starts + m`
+//! episodes ranks beside unconfirmed ones of `starts`; with equal counts, the order of the
+//! counts). With a check configured, `RUN/best/` holds the best-ranked policy checked so far
 //! instead of the one with the highest learning-curve value: a policy that scores one sampled
 //! rollout higher but falls from more starts, or shuffles, is not kept over one that walks.
 //! Candidates are each row whose learning-curve value is the highest so far
@@ -68,6 +78,9 @@ pub struct CheckConfig {
     /// The bar's share of episodes that must be classified `walk`: more than this. Default
     /// 0.5 (most episodes).
     pub walk_share: f64,
+    /// Starts added to confirm a policy at the bar on its first `starts` (module docs); the
+    /// bar is then judged on all of them. Default 0 (off).
+    pub confirm_starts: usize,
 }
 
 impl Default for CheckConfig {
@@ -78,6 +91,7 @@ impl Default for CheckConfig {
             new_best: true,
             finish_share: 0.8,
             walk_share: 0.5,
+            confirm_starts: 0,
         }
     }
 }
@@ -94,6 +108,12 @@ impl CheckConfig {
                 self.starts
             );
         }
+        if self.confirm_starts > MAX_STARTS {
+            crate::bail!(
+                "check.confirm_starts = {}: must be in 0..={MAX_STARTS}",
+                self.confirm_starts
+            );
+        }
         if self.every_steps == 0 {
             crate::bail!("check.every_steps = 0: must be ≥ 1");
         }
@@ -108,17 +128,27 @@ impl CheckConfig {
         Ok(())
     }
 
-    /// The gait-clock phase of start `k`: `(k + ½) / starts`.
+    /// The gait-clock phase of start `k`: `(k + ½) / starts` for the first `starts`, then
+    /// `(j + ¼) / confirm_starts` for confirmation start `j = k − starts`.
     pub fn phase(&self, k: usize) -> f32 {
-        ((k as f64 + 0.5) / self.starts as f64) as f32
+        if k < self.starts {
+            ((k as f64 + 0.5) / self.starts as f64) as f32
+        } else {
+            let j = (k - self.starts) as f64;
+            ((j + 0.25) / self.confirm_starts.max(1) as f64) as f32
+        }
     }
 }
 
 /// What one check found.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct CheckResult {
-    /// Episodes run.
+    /// Episodes run (the confirmation's included).
     pub starts: usize,
+    /// Of `starts`, the episodes run to confirm a policy at the bar on its first ones (0: no
+    /// confirmation ran; then absent from `checks.jsonl`).
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub confirm_starts: usize,
     /// Episodes that reached the end of the track.
     pub finished: usize,
     /// Episodes that fell.
@@ -143,13 +173,16 @@ impl CheckResult {
         self.classes.get(&class).copied().unwrap_or(0)
     }
 
-    /// The rank key (module docs): at the bar, finished, −falls, walks, mean distance.
-    pub fn score(&self) -> (bool, usize, std::cmp::Reverse<usize>, usize, f64) {
+    /// The rank key (module docs): at the bar, then the shares of starts finished, not
+    /// fallen and classified `walk`, then mean distance.
+    pub fn score(&self) -> (bool, f64, f64, f64, f64) {
+        let n = self.starts.max(1) as f64;
+        let share = |k: usize| k as f64 / n;
         (
             self.at_bar,
-            self.finished,
-            std::cmp::Reverse(self.falls),
-            self.count(GaitClass::Walk),
+            share(self.finished),
+            -share(self.falls),
+            share(self.count(GaitClass::Walk)),
             self.mean_distance,
         )
     }
@@ -169,8 +202,13 @@ impl CheckResult {
             .map(|(c, n)| format!("{} {n}", c.name()))
             .collect::<Vec<_>>()
             .join(", ");
+        let confirmed = if self.confirm_starts > 0 {
+            format!(", {} of the starts confirming", self.confirm_starts)
+        } else {
+            String::new()
+        };
         format!(
-            "{classes}; {}/{} finished, {} falls, {:.2} m/s{}",
+            "{classes}; {}/{} finished, {} falls, {:.2} m/s{}{confirmed}",
             self.finished,
             self.starts,
             self.falls,
@@ -205,34 +243,21 @@ impl Checker {
         &self.config
     }
 
-    /// Checks `agent`'s deterministic policy from every start, in parallel on the calling
-    /// rayon pool (the result does not depend on the thread count).
+    /// Checks `agent`'s deterministic policy from every start (and, when it meets the bar
+    /// and [`CheckConfig::confirm_starts`] asks, from the confirmation's), in parallel on the
+    /// calling rayon pool (the result does not depend on the thread count).
     pub fn check(&self, agent: &Agent) -> Result<CheckResult> {
-        let starts = self.config.starts;
-        let episodes: Vec<Start> = (0..starts)
-            .into_par_iter()
-            .map(|k| self.episode(agent, k))
-            .collect::<Result<_>>()?;
-        let mut classes = BTreeMap::new();
-        for e in &episodes {
-            *classes.entry(e.class).or_insert(0) += 1;
+        let (starts, confirm) = (self.config.starts, self.config.confirm_starts);
+        let run = |ks: std::ops::Range<usize>| -> Result<Vec<Start>> {
+            ks.into_par_iter().map(|k| self.episode(agent, k)).collect()
+        };
+        let mut episodes = run(0..starts)?;
+        let first = judge(&self.config, &episodes, 0);
+        if !first.at_bar || confirm == 0 {
+            return Ok(first);
         }
-        let times: Vec<f64> = episodes.iter().filter_map(|e| e.track_time).collect();
-        let finished = times.len();
-        let n = starts as f64;
-        let walks = classes.get(&GaitClass::Walk).copied().unwrap_or(0);
-        Ok(CheckResult {
-            starts,
-            finished,
-            falls: episodes.iter().filter(|e| e.fell).count(),
-            mean_forward_velocity: episodes.iter().map(|e| e.speed).sum::<f64>() / n,
-            mean_distance: episodes.iter().map(|e| e.distance).sum::<f64>() / n,
-            track_time: (!times.is_empty()).then(|| times.iter().sum::<f64>() / times.len() as f64),
-            at_bar: finished as f64 >= self.config.finish_share * n - 1e-9
-                && walks as f64 > self.config.walk_share * n,
-            check_steps: episodes.iter().map(|e| e.steps).sum(),
-            classes,
-        })
+        episodes.extend(run(starts..starts + confirm)?);
+        Ok(judge(&self.config, &episodes, confirm))
     }
 
     /// Start `k`: one deterministic episode, judged.
@@ -285,6 +310,36 @@ impl Checker {
             distance: g.distance,
             steps,
         })
+    }
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
+/// Judges a check's episodes by the bar of `config` (`confirm` of them confirming).
+fn judge(config: &CheckConfig, episodes: &[Start], confirm: usize) -> CheckResult {
+    let mut classes = BTreeMap::new();
+    for e in episodes {
+        *classes.entry(e.class).or_insert(0) += 1;
+    }
+    let times: Vec<f64> = episodes.iter().filter_map(|e| e.track_time).collect();
+    let finished = times.len();
+    let starts = episodes.len();
+    let n = starts as f64;
+    let walks = classes.get(&GaitClass::Walk).copied().unwrap_or(0);
+    CheckResult {
+        starts,
+        confirm_starts: confirm,
+        finished,
+        falls: episodes.iter().filter(|e| e.fell).count(),
+        mean_forward_velocity: episodes.iter().map(|e| e.speed).sum::<f64>() / n,
+        mean_distance: episodes.iter().map(|e| e.distance).sum::<f64>() / n,
+        track_time: (!times.is_empty()).then(|| times.iter().sum::<f64>() / times.len() as f64),
+        at_bar: finished as f64 >= config.finish_share * n - 1e-9
+            && walks as f64 > config.walk_share * n,
+        check_steps: episodes.iter().map(|e| e.steps).sum(),
+        classes,
     }
 }
 
@@ -483,5 +538,114 @@ impl CheckState {
             ("check_s", Some(self.seconds)),
             ("check_env_steps", Some(self.env_steps as f64)),
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A start that walks to the line (or not) and falls (or not).
+    fn start(finished: bool, fell: bool) -> Start {
+        Start {
+            class: if fell {
+                GaitClass::Fall
+            } else {
+                GaitClass::Walk
+            },
+            track_time: finished.then_some(50.0),
+            fell,
+            speed: 1.0,
+            distance: if finished { 50.0 } else { 10.0 },
+            steps: 100,
+        }
+    }
+
+    #[test]
+    fn the_bar_is_judged_on_every_episode_of_a_confirmed_check() {
+        let config = CheckConfig {
+            confirm_starts: 20,
+            ..CheckConfig::default()
+        };
+        // 9 of 10 first starts finish: at the bar.
+        let mut episodes: Vec<Start> = (0..10).map(|k| start(k != 3, k == 3)).collect();
+        let first = judge(&config, &episodes, 0);
+        assert!(first.at_bar && first.finished == 9 && first.starts == 10);
+        // 15 of 20 fresh ones: 24 of 30 in all, exactly 80 %: still at the bar.
+        episodes.extend((0..20).map(|k| start(k >= 5, k < 5)));
+        let all = judge(&config, &episodes, 20);
+        assert_eq!((all.starts, all.confirm_starts, all.finished), (30, 20, 24));
+        assert_eq!(all.falls, 6);
+        assert!(all.at_bar);
+        // One more fall among the fresh ones: 23 of 30 is below 80 %.
+        episodes[10 + 5] = start(false, true);
+        let below = judge(&config, &episodes, 20);
+        assert_eq!(below.finished, 23);
+        assert!(!below.at_bar);
+        // Ranked by shares: the confirmed check at the bar above the one below; and an
+        // unconfirmed 9/10 against a confirmed 27/30 is decided by the next key (falls).
+        assert!(all.beats(&below) && !below.beats(&all));
+        let confirmed = judge(
+            &config,
+            &(0..30)
+                .map(|k| start(k % 10 != 3, false))
+                .collect::<Vec<_>>(),
+            20,
+        );
+        assert_eq!(confirmed.finished, 27);
+        assert!(confirmed.beats(&first), "same finish share, fewer falls");
+    }
+
+    #[test]
+    fn shares_rank_checks_of_equal_size_as_their_counts_did() {
+        let config = CheckConfig::default();
+        let results: Vec<CheckResult> = (0..=10)
+            .flat_map(|finished| {
+                (0..=10 - finished).map(move |falls| {
+                    (0..10)
+                        .map(|k| start(k < finished, k >= finished && k < finished + falls))
+                        .collect::<Vec<_>>()
+                })
+            })
+            .map(|e| judge(&config, &e, 0))
+            .collect();
+        for a in &results {
+            for b in &results {
+                let counts = |r: &CheckResult| {
+                    (
+                        r.at_bar,
+                        r.finished,
+                        std::cmp::Reverse(r.falls),
+                        r.count(GaitClass::Walk),
+                    )
+                };
+                let by_counts = counts(a)
+                    .cmp(&counts(b))
+                    .then(a.mean_distance.partial_cmp(&b.mean_distance).unwrap());
+                assert_eq!(
+                    a.beats(b),
+                    by_counts == std::cmp::Ordering::Greater,
+                    "{} vs {}",
+                    a.describe(),
+                    b.describe()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn confirmation_starts_sit_between_the_first_ones_on_the_clock() {
+        let config = CheckConfig {
+            starts: 4,
+            confirm_starts: 4,
+            ..CheckConfig::default()
+        };
+        let phases: Vec<f32> = (0..8).map(|k| config.phase(k)).collect();
+        assert_eq!(
+            phases,
+            [0.125, 0.375, 0.625, 0.875, 0.0625, 0.3125, 0.5625, 0.8125]
+        );
+        let off = CheckConfig::default();
+        assert_eq!(off.phase(9), 0.95);
     }
 }

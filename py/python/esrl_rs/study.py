@@ -78,20 +78,23 @@ def checks_figure(study_dir: PathLike, out: PathLike, dpi: int = 150) -> Path:
     for ax, run in zip(axes.flat, runs):
         s = check_series(run / "checks.jsonl")
         x = s["env_steps"] / 1e6
-        ax.stackplot(x, *s["classes"].values(), step="post", labels=list(s["classes"]),
+        # Shares of each check's starts: a confirmed check (check.confirm_starts) has more.
+        n = np.maximum(s["starts"], 1.0)
+        ax.stackplot(x, *(v / n for v in s["classes"].values()), step="post",
+                     labels=list(s["classes"]),
                      colors=[CLASS_COLORS.get(c, "black") for c in s["classes"]], alpha=0.55)
-        ax.step(x, s["finished"], where="post", color="black", lw=1.0, label="past 50 m")
+        ax.step(x, s["finished"] / n, where="post", color="black", lw=1.0, label="past 50 m")
         if s["at_bar"].any():
             ax.axvline(x[np.argmax(s["at_bar"])], color="black", ls=":", lw=1.0,
                        label="first at the bar")
         ax.set_title(run.name, fontsize=9)
-        ax.set_ylim(0, float(s["starts"].max()) if len(x) else 1)
+        ax.set_ylim(0, 1)
         ax.set_xlabel("env steps (M)", fontsize=8)
         ax.tick_params(labelsize=7)
     for ax in list(axes.flat)[len(runs):]:
         ax.axis("off")
     for ax in axes[:, 0]:
-        ax.set_ylabel("starts of a check", fontsize=8)
+        ax.set_ylabel("share of a check's starts", fontsize=8)
     handles: Dict[str, Any] = {}
     for ax in axes.flat:
         for h, lab in zip(*ax.get_legend_handles_labels()):
