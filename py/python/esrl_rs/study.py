@@ -101,8 +101,8 @@ def checks_figure(study_dir: PathLike, out: PathLike, dpi: int = 150) -> Path:
             handles.setdefault(lab, h)
     fig.legend(list(handles.values()), list(handles), loc="lower center", ncol=len(handles),
                fontsize=7, frameon=False)
-    fig.suptitle("walking checks during training: episodes by gait class (stacked), starts past "
-                 "the 50 m line", fontsize=9)
+    fig.suptitle("walking checks during training: shares of each check's starts by gait class "
+                 "(stacked) and past the 50 m line", fontsize=9)
     fig.tight_layout(rect=(0, 0.06, 1, 1))
     return _save(fig, out, "study_checks.png", dpi)
 
