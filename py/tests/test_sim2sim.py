@@ -72,3 +72,46 @@ def test_the_cross_check_runs_a_policy_in_both(capsys) -> None:
     assert r["esrl"]["finished"] == 2, "the flagship finishes in esrl"
     assert main([str(FLAGSHIP), "--episodes", "1"]) == 0
     assert "| MuJoCo |" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("cone,servo", [("elliptic", "explicit"), ("pyramidal", "actuator"),
+                                        ("elliptic", "actuator")])
+def test_every_mujoco_setting_stands_and_steps_alike(engines, cone, servo) -> None:
+    """The other settings: a zero action stands 10 s, and one control step from the same
+    state agrees with esrl as the default setting does."""
+    _, rust, _ = engines
+    policy = esrl_rs.load_policy(FLAGSHIP)
+    mj = MujocoWalk(policy._core.walk_config, cone=cone, servo=servo)
+    assert mj.servo == servo
+    mj.reset(0)
+    for _ in range(400):
+        _, mj_fell, _, s = mj.step(np.zeros(6))
+        assert not mj_fell
+    assert abs(s["torso_z_error"]) < 0.01
+    # The actuators deliver the servo law's torque (within the step's change of state).
+    if servo == "actuator":
+        q = np.array([mj.d.qpos[i] for i in mj.act_q])
+        qd = np.array([mj.d.qvel[i] for i in mj.act_v])
+        kp, kd = float(mj.target["stiffness"]), float(mj.target["damping"])
+        law = np.clip(kp * (mj.q_stand - q) - kd * qd, -mj.effort, mj.effort)
+        np.testing.assert_allclose(s["torques"], law, atol=0.05 * mj.effort.max())
+    names = rust.obs_names
+    pose = np.array([n.split("/")[0] in ("height_error", "lateral_offset", "orientation",
+                                         "joint_angle", "passive_angle", "clock")
+                     for n in names])
+    for seed in range(2):
+        rust.reset(seed=seed)
+        mj.reset(seed)
+        o_rust, *_ = rust.step(np.zeros(6, dtype=np.float32))
+        o_mj, *_ = mj.step(np.zeros(6))
+        np.testing.assert_allclose(o_mj[pose], o_rust[pose], atol=1e-2)
+
+
+def test_unknown_settings_are_refused() -> None:
+    walk = esrl_rs.load_policy(FLAGSHIP)._core.walk_config
+    with pytest.raises(ValueError, match="cone 'round'"):
+        MujocoWalk(walk, cone="round")
+    with pytest.raises(ValueError, match="servo 'pid'"):
+        MujocoWalk(walk, servo="pid")
+    with pytest.raises(SystemExit):
+        main([str(FLAGSHIP), "--cone", "round"])

@@ -26,6 +26,12 @@ over the last 2° under ``fade``; MuJoCo: a soft limit constraint) and the servo
 integrates it implicitly inside its solver; here it is an explicit torque per physics step,
 stable at these gains: ω = √(kp/I) ≈ 55 rad/s, ω·h ≈ 0.34). A policy that walks in both has
 learned a gait, not a solver artifact; one that walks in one only depends on what differs.
+
+Two of MuJoCo's own settings can be chosen, to see whether a result depends on them:
+``cone`` (:data:`CONES`: MuJoCo's default ``pyramidal`` friction cone, or ``elliptic``, the
+shape of Rapier's, which caps the tangential impulse's magnitude) and ``servo``
+(:data:`SERVOS`: the explicit torque above, or MuJoCo position actuators of the same gains
+and torque limit, their damping integrated implicitly as Rapier integrates its servo).
 """
 
 from __future__ import annotations
@@ -43,7 +49,14 @@ import numpy as np
 
 from . import _native, metrics
 
-__all__ = ["MujocoWalk", "cross_check", "main"]
+__all__ = ["MujocoWalk", "cross_check", "main", "CONES", "SERVOS"]
+
+#: MuJoCo's friction cones: ``pyramidal`` (its default) or ``elliptic``.
+CONES = ("pyramidal", "elliptic")
+#: How the joint-angle servo is applied: ``explicit`` (the torque computed from the state at
+#: each physics step) or ``actuator`` (MuJoCo position actuators, damping integrated
+#: implicitly).
+SERVOS = ("explicit", "actuator")
 
 
 def _floating_urdf(text: str) -> str:
@@ -78,8 +91,14 @@ class MujocoWalk:
     seed; ``step(action)`` returns ``(obs, terminated, truncated, sample)``, ``sample`` one
     step of the gait trace."""
 
-    def __init__(self, walk_config: Mapping[str, Any]) -> None:
+    def __init__(self, walk_config: Mapping[str, Any], cone: str = "pyramidal",
+                 servo: str = "explicit") -> None:
         import mujoco
+
+        if cone not in CONES:
+            raise ValueError(f"cone {cone!r}: expected one of {', '.join(CONES)}")
+        if servo not in SERVOS:
+            raise ValueError(f"servo {servo!r}: expected one of {', '.join(SERVOS)}")
 
         self.mujoco = mujoco
         self.rust = _native.EnvCore.walk(dict(walk_config))
@@ -100,6 +119,19 @@ class MujocoWalk:
         spec.option.timestep = self.h
         spec.option.gravity = [0.0, 0.0, -float(physics["gravity"])]
         spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+        spec.option.cone = (mujoco.mjtCone.mjCONE_ELLIPTIC if cone == "elliptic"
+                            else mujoco.mjtCone.mjCONE_PYRAMIDAL)
+        names = self.rust.action_names
+        self.servo = servo if self.cfg["action"] == "target" else "explicit"
+        if self.servo == "actuator":
+            kp = float(self.cfg["target"]["stiffness"])
+            kd = float(self.cfg["target"]["damping"])
+            for n, e in zip(names, self.rust.effort_limits):
+                a = spec.add_actuator()
+                a.name, a.target, a.trntype = n, n, mujoco.mjtTrn.mjTRN_JOINT
+                a.set_to_position(kp=kp, kv=kd)
+                a.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+                a.forcerange = [-float(e), float(e)]
         plane = spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_PLANE, size=[200, 200, 0.1])
         plane.friction = [float(physics["friction"]), 0.005, 0.0001]
         plane.contype, plane.conaffinity = 0, 1
@@ -111,7 +143,6 @@ class MujocoWalk:
                 m.geom_friction[g][0] = float(physics["friction"])
         self.m, self.d = m, mujoco.MjData(m)
         self.torso = m.body(self._root_name(text)).id
-        names = self.rust.action_names
         self.act_joints = [m.joint(n).id for n in names]
         self.act_q = [int(m.jnt_qposadr[j]) for j in self.act_joints]
         self.act_v = [int(m.jnt_dofadr[j]) for j in self.act_joints]
@@ -237,17 +268,22 @@ class MujocoWalk:
         power = np.zeros(len(a))
         targets = self._targets(a) if self.mode == "target" else None
         kp, kd = float(self.target["stiffness"]), float(self.target["damping"])
+        if self.servo == "actuator":
+            d.ctrl[:] = targets
         for _ in range(self.substeps):
             q = np.array([d.qpos[i] for i in self.act_q])
-            qd = np.array([d.qvel[i] for i in self.act_v])
-            if targets is not None:
-                tau = np.clip(kp * (targets - q) - kd * qd, -self.effort, self.effort)
-            else:
-                tau = a * self.effort
-            d.qfrc_applied[:] = 0.0
-            for v, t in zip(self.act_v, tau):
-                d.qfrc_applied[v] = t
+            if self.servo == "explicit":
+                if targets is not None:
+                    qd = np.array([d.qvel[i] for i in self.act_v])
+                    tau = np.clip(kp * (targets - q) - kd * qd, -self.effort, self.effort)
+                else:
+                    tau = a * self.effort
+                d.qfrc_applied[:] = 0.0
+                for v, t in zip(self.act_v, tau):
+                    d.qfrc_applied[v] = t
             mj.mj_step(m, d)
+            if self.servo == "actuator":
+                tau = d.actuator_force.copy()
             q1 = np.array([d.qpos[i] for i in self.act_q])
             torque += tau / self.substeps
             power += np.abs(tau * (q1 - q) / self.h) / self.substeps
@@ -316,11 +352,13 @@ def _summary(gaits: List[Dict[str, Any]]) -> Dict[str, Any]:
     }
 
 
-def cross_check(path: str, episodes: int = 10, seed: int = 0) -> Dict[str, Any]:
+def cross_check(path: str, episodes: int = 10, seed: int = 0, cone: str = "pyramidal",
+                servo: str = "explicit") -> Dict[str, Any]:
     """The policy in ``path`` (a run, checkpoint, ``best/`` or record ``policy/`` folder)
     from reset seeds ``seed … seed + episodes − 1`` in esrl (``Policy.evaluate``, the code
-    of ``esrl eval``) and on MuJoCo (:class:`MujocoWalk`): both engines' gait metrics
-    (:func:`esrl_rs.metrics.gait_metrics`), summarised per engine and per episode."""
+    of ``esrl eval``) and on MuJoCo (:class:`MujocoWalk` with ``cone`` and ``servo``): both
+    engines' gait metrics (:func:`esrl_rs.metrics.gait_metrics`), summarised per engine and
+    per episode."""
     from .policy import load_policy
 
     policy = load_policy(path)
@@ -328,12 +366,13 @@ def cross_check(path: str, episodes: int = 10, seed: int = 0) -> Dict[str, Any]:
         raise ValueError(f"{path}: a {policy.env} run; sim2sim is for the walking task")
     walk = policy._core.walk_config
     esrl = policy.evaluate(episodes, seed)
-    env = MujocoWalk(walk)
+    env = MujocoWalk(walk, cone=cone, servo=servo)
     track = float(env.track)
     mj = [metrics.gait_metrics(env.episode(policy, seed + k), track_length=track)
           for k in range(episodes)]
     ours = [e["gait"] for e in esrl["episodes"] if e["gait"] is not None]
     return {"policy": os.fspath(path), "seed": seed, "episodes": episodes,
+            "mujoco_settings": {"cone": cone, "servo": env.servo},
             "esrl": _summary(ours), "mujoco": _summary(mj),
             "per_episode": [{"seed": seed + k, "esrl": (ours[k].get("cycle") or {}).get(
                 "gait_class"), "mujoco": (mj[k].get("cycle") or {}).get("gait_class"),
@@ -364,6 +403,12 @@ def main(argv: Optional[List[str]] = None) -> int:
                     "policy/ folder")
     ap.add_argument("--episodes", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0, help="reset seed of the first episode")
+    ap.add_argument("--cone", choices=CONES, default="pyramidal",
+                    help="MuJoCo's friction cone (default pyramidal, MuJoCo's own; elliptic is "
+                    "the shape of Rapier's)")
+    ap.add_argument("--servo", choices=SERVOS, default="explicit",
+                    help="the joint-angle servo as a torque computed at each physics step "
+                    "(explicit, the default) or as MuJoCo position actuators (actuator)")
     ap.add_argument("--json", action="store_true", help="print the result as JSON")
     a = ap.parse_args(argv)
     try:
@@ -376,7 +421,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         print("error: --episodes must be at least 1", file=sys.stderr)
         return 2
     try:
-        r = cross_check(a.policy, a.episodes, a.seed)
+        r = cross_check(a.policy, a.episodes, a.seed, a.cone, a.servo)
     except (ValueError, OSError, _native.EsrlError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
