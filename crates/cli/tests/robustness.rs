@@ -21,13 +21,19 @@ fn perturbed_evaluations_and_the_card() {
         "friction=0.4",
         "--perturb",
         "delay=1",
+        "--perturb",
+        "contact=30",
         "--out",
         o,
     ]);
     let report = read_json(&out);
     assert_eq!(
         report["perturb"],
-        serde_json::json!([{"kind": "friction", "value": 0.4}, {"kind": "delay", "value": 1}])
+        serde_json::json!([
+            {"kind": "friction", "value": 0.4},
+            {"kind": "delay", "value": 1},
+            {"kind": "contact", "value": 30.0}
+        ])
     );
     let plain = tmp.path().join("plain.json");
     ok(&["eval", r, "--out", plain.to_str().unwrap()]);
@@ -37,6 +43,7 @@ fn perturbed_evaluations_and_the_card() {
         ("delay=0.5", "whole control steps"),
         ("friction", "KIND=VALUE"),
         ("friction=-1", "friction"),
+        ("contact=0.5", "contact_frequency"),
     ] {
         let err = fails(&["eval", r, "--perturb", bad]);
         assert!(err.contains(want), "{bad}: {err}");

@@ -28,6 +28,9 @@ pub enum Disturbance {
     ObsNoise(f32),
     /// The joints get the action of this many control steps before.
     Delay(u32),
+    /// Natural frequency of the robot–ground contacts, Hz (the task's default is 60: lower
+    /// is softer ground).
+    Contact(f32),
 }
 
 impl Disturbance {
@@ -42,6 +45,7 @@ impl Disturbance {
             Disturbance::Slope(_) => "slope",
             Disturbance::ObsNoise(_) => "obs_noise",
             Disturbance::Delay(_) => "delay",
+            Disturbance::Contact(_) => "contact",
         }
     }
 
@@ -54,6 +58,7 @@ impl Disturbance {
             Disturbance::Slope(v) => (v, "°"),
             Disturbance::ObsNoise(v) => (v, "SD"),
             Disturbance::Delay(v) => (v as f32, "steps"),
+            Disturbance::Contact(v) => (v, "Hz"),
         }
     }
 
@@ -74,12 +79,13 @@ impl Disturbance {
             "strength" => Disturbance::Strength(v),
             "slope" => Disturbance::Slope(v),
             "obs_noise" => Disturbance::ObsNoise(v),
+            "contact" => Disturbance::Contact(v),
             "delay" if v >= 0.0 && v.fract() == 0.0 => Disturbance::Delay(v as u32),
             "delay" => bail!("--perturb {text}: the delay counts whole control steps"),
             other => bail!(
                 "--perturb {text}: unknown disturbance `{other}`; one of push_sagittal, \
                  push_lateral (m/s), friction (coefficient), mass, strength (scale), slope \
-                 (degrees), obs_noise (SD), delay (control steps)"
+                 (degrees), obs_noise (SD), delay (control steps), contact (Hz)"
             ),
         })
     }
@@ -105,6 +111,7 @@ impl Disturbance {
             Disturbance::Slope(v) => walk.physics.slope = v.to_radians(),
             Disturbance::ObsNoise(v) => p.obs_noise = v,
             Disturbance::Delay(v) => p.action_delay = v,
+            Disturbance::Contact(v) => walk.physics.contact_frequency = v,
         }
     }
 }

@@ -4,7 +4,8 @@
 //! mass Rapier sees; `strength` scales the torque an action commands; `action_delay` hands
 //! the joints the action of d steps before; `obs_noise` adds noise of the given spread that
 //! repeats with the seed; pushes come every `push_every` s and move the torso by about the
-//! push. With no disturbance the environment is what it was.
+//! push; a softer ground contact (`contact_frequency`) lets a standing robot sink by about
+//! g/ω². With no disturbance the environment is what it was.
 
 use std::sync::Arc;
 
@@ -253,4 +254,78 @@ fn randomised_episodes_draw_friction_mass_and_strength_from_their_ranges() {
     env.reset(3);
     let again = env.sim().total_mass() / nominal;
     assert_eq!(again, masses[3], "the same seed draws the same episode");
+}
+
+/// The standing robot's torso height after 2 s on ground of contact frequency `hz`, and the
+/// lowest foot origin's, m.
+fn standing_height(hz: f32) -> (f32, f32) {
+    let mut cfg = WalkConfig {
+        action: esrl_sim::ActionMode::Target,
+        ..WalkConfig::default()
+    };
+    cfg.physics.contact_frequency = hz;
+    standing_heights(cfg)
+}
+
+fn standing_heights(cfg: WalkConfig) -> (f32, f32) {
+    let mut env = WalkEnv::new(cfg).unwrap();
+    env.reset(0);
+    for _ in 0..80 {
+        env.step(&[0.0; 6]);
+    }
+    let poses = env.link_poses();
+    let feet: Vec<usize> = env
+        .config()
+        .foot_links
+        .iter()
+        .map(|n| env.model().link_index(n).unwrap())
+        .collect();
+    let foot = feet
+        .iter()
+        .map(|&l| poses[l].translation[2])
+        .fold(f32::MAX, f32::min);
+    (poses[env.model().root()].translation[2], foot)
+}
+
+#[test]
+fn a_softer_ground_lets_the_standing_robot_sink_by_about_g_over_omega_squared() {
+    // A contact spring of natural frequency ω holding its load sinks by about g/ω² (a mass
+    // on a spring: m·g = k·x, ω² = k/m); at Rapier's 60 Hz that is 0.07 mm, at 10 Hz 2.5 mm.
+    // Rapier's contact points each carry more than their share of the effective mass, so
+    // the measured sink is that times a factor of order one (1.5-1.7 here), never less.
+    let sink = |hz: f32| {
+        let (torso, foot) = standing_height(hz);
+        assert!(
+            torso > 0.85,
+            "{hz} Hz: the robot stands (torso at {torso} m)"
+        );
+        foot
+    };
+    let g_over_w2 = |hz: f32| 9.81 / (2.0 * std::f32::consts::PI * hz).powi(2);
+    let stiff = sink(60.0);
+    for hz in [10.0f32, 20.0] {
+        let extra = stiff - sink(hz);
+        let expected = g_over_w2(hz) - g_over_w2(60.0);
+        let ratio = extra / expected;
+        assert!(
+            (1.0..2.5).contains(&ratio),
+            "{hz} Hz: the feet sink {:.2} mm deeper than at 60 Hz; g/ω² says {:.2} mm",
+            1e3 * extra,
+            1e3 * expected
+        );
+    }
+}
+
+#[test]
+fn a_contact_frequency_range_draws_the_episode_s_ground() {
+    let cfg = WalkConfig {
+        action: esrl_sim::ActionMode::Target,
+        perturb: Perturb {
+            contact_frequency_range: Some([10.0, 10.0]),
+            ..Perturb::default()
+        },
+        ..WalkConfig::default()
+    };
+    assert_eq!(standing_heights(cfg), standing_height(10.0));
+    assert_ne!(standing_height(10.0), standing_height(60.0));
 }

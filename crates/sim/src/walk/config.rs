@@ -380,6 +380,10 @@ pub struct Perturb {
     /// Per episode, `strength` drawn uniformly from `[lo, hi]`. Default none.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub strength_range: Option<[f32; 2]>,
+    /// Per episode, `physics.contact_frequency` (Hz) drawn uniformly from `[lo, hi]`: softer
+    /// and stiffer ground contact. Default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact_frequency_range: Option<[f32; 2]>,
 }
 
 impl Default for Perturb {
@@ -394,6 +398,7 @@ impl Default for Perturb {
             friction_range: None,
             mass_range: None,
             strength_range: None,
+            contact_frequency_range: None,
         }
     }
 }
@@ -408,6 +413,7 @@ impl Perturb {
             && self.friction_range.is_none()
             && self.mass_range.is_none()
             && self.strength_range.is_none()
+            && self.contact_frequency_range.is_none()
     }
 
     fn validate(&self) -> Result<(), SimError> {
@@ -446,6 +452,12 @@ impl Perturb {
             ("friction_range", self.friction_range, 0.0, 10.0),
             ("mass_range", self.mass_range, 0.01, 100.0),
             ("strength_range", self.strength_range, 0.01, 10.0),
+            (
+                "contact_frequency_range",
+                self.contact_frequency_range,
+                1.0,
+                10_000.0,
+            ),
         ] {
             if let Some([a, b]) = range {
                 if !(a.is_finite() && b.is_finite() && lo <= a && a <= b && b <= hi) {

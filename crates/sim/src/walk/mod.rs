@@ -595,14 +595,20 @@ impl Env for WalkEnv {
         let (state, drawn) = s.initial_state(seed);
         self.disturb = Disturb::reset(seed, &s.config.perturb, s.actuated.len());
         let p = &s.config.perturb;
-        if p.friction_range.is_some() || p.mass_range.is_some() {
-            // Domain randomisation: this episode's friction and masses.
+        if p.friction_range.is_some()
+            || p.mass_range.is_some()
+            || p.contact_frequency_range.is_some()
+        {
+            // Domain randomisation: this episode's friction, masses and ground contact.
             let mut setup = s.setup.clone();
             if let Some(r) = p.friction_range {
                 setup.physics.friction = self.disturb.uniform(r);
             }
             if let Some(r) = p.mass_range {
                 setup.physics.mass_scale = self.disturb.uniform(r);
+            }
+            if let Some(r) = p.contact_frequency_range {
+                setup.physics.contact_frequency = self.disturb.uniform(r);
             }
             self.sim = RobotSim::build(s.model.clone(), &setup, &state);
         } else {
