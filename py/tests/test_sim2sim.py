@@ -9,6 +9,7 @@ cross-check runs a committed policy in both. MuJoCo is optional: without it thes
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -115,3 +116,21 @@ def test_unknown_settings_are_refused() -> None:
         MujocoWalk(walk, servo="pid")
     with pytest.raises(SystemExit):
         main([str(FLAGSHIP), "--cone", "round"])
+
+
+def test_several_policies_under_every_setting(capsys) -> None:
+    """`--cone all --servo all` with two policies: one table each, esrl's row once, then
+    MuJoCo under the four settings; the JSON is a list of the four results per policy."""
+    record = FLAGSHIP.parents[1] / "seeds" / "records" / "default-s2" / "policy"
+    assert main([str(FLAGSHIP), str(record), "--episodes", "1", "--cone", "all",
+                 "--servo", "all"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("| esrl (Rapier) |") == 2
+    for cone in ("pyramidal", "elliptic"):
+        for servo in ("explicit", "actuator"):
+            assert out.count(f"| MuJoCo, {cone} cone, {servo} servo |") == 2
+    assert main([str(FLAGSHIP), "--episodes", "1", "--cone", "all", "--json"]) == 0
+    results = json.loads(capsys.readouterr().out)
+    assert [r["mujoco_settings"] for r in results] == [
+        {"cone": "pyramidal", "servo": "explicit"}, {"cone": "elliptic", "servo": "explicit"}]
+    assert results[0]["esrl"] == results[1]["esrl"], "esrl's episodes are run once"

@@ -49,7 +49,7 @@ import numpy as np
 
 from . import _native, metrics
 
-__all__ = ["MujocoWalk", "cross_check", "main", "CONES", "SERVOS"]
+__all__ = ["MujocoWalk", "cross_check", "cross_checks", "main", "CONES", "SERVOS"]
 
 #: MuJoCo's friction cones: ``pyramidal`` (its default) or ``elliptic``.
 CONES = ("pyramidal", "elliptic")
@@ -359,56 +359,87 @@ def cross_check(path: str, episodes: int = 10, seed: int = 0, cone: str = "pyram
     of ``esrl eval``) and on MuJoCo (:class:`MujocoWalk` with ``cone`` and ``servo``): both
     engines' gait metrics (:func:`esrl_rs.metrics.gait_metrics`), summarised per engine and
     per episode."""
+    return cross_checks(path, episodes, seed, [(cone, servo)])[0]
+
+
+def cross_checks(path: str, episodes: int, seed: int,
+                 settings: Sequence[Sequence[str]]) -> List[Dict[str, Any]]:
+    """:func:`cross_check` under each ``(cone, servo)`` of ``settings``, esrl's episodes run
+    once."""
     from .policy import load_policy
 
     policy = load_policy(path)
     if policy.env != "walk":
         raise ValueError(f"{path}: a {policy.env} run; sim2sim is for the walking task")
     walk = policy._core.walk_config
-    esrl = policy.evaluate(episodes, seed)
-    env = MujocoWalk(walk, cone=cone, servo=servo)
-    track = float(env.track)
-    mj = [metrics.gait_metrics(env.episode(policy, seed + k), track_length=track)
-          for k in range(episodes)]
-    ours = [e["gait"] for e in esrl["episodes"] if e["gait"] is not None]
-    return {"policy": os.fspath(path), "seed": seed, "episodes": episodes,
+    gaits = [e["gait"] for e in policy.evaluate(episodes, seed)["episodes"]]
+    ours = [g for g in gaits if g is not None]
+
+    def cls(g: Optional[Dict[str, Any]]) -> Optional[str]:
+        return (g.get("cycle") or {}).get("gait_class") if g is not None else "fall"
+
+    out = []
+    for cone, servo in settings:
+        env = MujocoWalk(walk, cone=cone, servo=servo)
+        track = float(env.track)
+        mj = [metrics.gait_metrics(env.episode(policy, seed + k), track_length=track)
+              for k in range(episodes)]
+        out.append({
+            "policy": os.fspath(path), "seed": seed, "episodes": episodes,
             "mujoco_settings": {"cone": cone, "servo": env.servo},
             "esrl": _summary(ours), "mujoco": _summary(mj),
-            "per_episode": [{"seed": seed + k, "esrl": (ours[k].get("cycle") or {}).get(
-                "gait_class"), "mujoco": (mj[k].get("cycle") or {}).get("gait_class"),
-                "esrl_finished": ours[k].get("track_time") is not None,
-                "mujoco_finished": mj[k].get("track_time") is not None,
-                "mujoco_distance": mj[k]["distance"]} for k in range(episodes)]}
+            "per_episode": [{
+                "seed": seed + k, "esrl": cls(g), "mujoco": cls(m),
+                "esrl_finished": g is not None and g.get("track_time") is not None,
+                "mujoco_finished": m.get("track_time") is not None,
+                "mujoco_distance": m["distance"]} for k, (g, m) in enumerate(zip(gaits, mj))]})
+    return out
+
+
+def _row(name: str, s: Dict[str, Any]) -> str:
+    classes = ", ".join(f"{c} {n}" for c, n in s["classes"].items())
+    tt = f"{s['track_time']:.1f}" if s["track_time"] is not None else "–"
+    return (f"| {name} | {classes} | {s['finished']}/{s['episodes']} | {s['falls']} | "
+            f"{tt} | {s['speed']:.2f} | {s['sway']:.3f} | {100 * s['knee_asymmetry']:.1f} % |")
+
+
+_HEADER = ("| engine | gait classes | finished 50 m | falls | track time (s) | speed (m/s) | "
+           "sway (m) | knee asym. |\n|---|---|---:|---:|---:|---:|---:|---:|")
 
 
 def _table(r: Dict[str, Any]) -> str:
-    def row(name: str, s: Dict[str, Any]) -> str:
-        classes = ", ".join(f"{c} {n}" for c, n in s["classes"].items())
-        tt = f"{s['track_time']:.1f}" if s["track_time"] is not None else "–"
-        return (f"| {name} | {classes} | {s['finished']}/{s['episodes']} | {s['falls']} | "
-                f"{tt} | {s['speed']:.2f} | {s['sway']:.3f} | {100 * s['knee_asymmetry']:.1f} % |")
+    return "\n".join([_HEADER, _row("esrl (Rapier)", r["esrl"]), _row("MuJoCo", r["mujoco"])]) + "\n"
 
-    return "\n".join([
-        "| engine | gait classes | finished 50 m | falls | track time (s) | speed (m/s) | "
-        "sway (m) | knee asym. |",
-        "|---|---|---:|---:|---:|---:|---:|---:|",
-        row("esrl (Rapier)", r["esrl"]), row("MuJoCo", r["mujoco"])]) + "\n"
+
+def _tables(results: Sequence[Dict[str, Any]]) -> str:
+    """One table per policy: esrl's row, then MuJoCo's under each setting."""
+    parts = []
+    for k, r in enumerate(results):
+        if k == 0 or r["policy"] != results[k - 1]["policy"]:
+            if parts:
+                parts.append("")
+            parts += [f"{r['policy']} ({r['episodes']} starts from reset seed {r['seed']})", "",
+                      _HEADER, _row("esrl (Rapier)", r["esrl"])]
+        st = r["mujoco_settings"]
+        parts.append(_row(f"MuJoCo, {st['cone']} cone, {st['servo']} servo", r["mujoco"]))
+    return "\n".join(parts) + "\n"
 
 
 def main(argv: Optional[List[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m esrl_rs.sim2sim",
                                  description="Run an esrl walking policy in esrl and on MuJoCo "
                                  "from the same starts and compare the gait metrics.")
-    ap.add_argument("policy", help="a run folder, a checkpoint or best/ folder, or a record's "
-                    "policy/ folder")
+    ap.add_argument("policy", nargs="+", help="a run folder, a checkpoint or best/ folder, or a "
+                    "record's policy/ folder (several: one table each)")
     ap.add_argument("--episodes", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0, help="reset seed of the first episode")
-    ap.add_argument("--cone", choices=CONES, default="pyramidal",
+    ap.add_argument("--cone", choices=CONES + ("all",), default="pyramidal",
                     help="MuJoCo's friction cone (default pyramidal, MuJoCo's own; elliptic is "
-                    "the shape of Rapier's)")
-    ap.add_argument("--servo", choices=SERVOS, default="explicit",
+                    "the shape of Rapier's; all: both)")
+    ap.add_argument("--servo", choices=SERVOS + ("all",), default="explicit",
                     help="the joint-angle servo as a torque computed at each physics step "
-                    "(explicit, the default) or as MuJoCo position actuators (actuator)")
+                    "(explicit, the default) or as MuJoCo position actuators (actuator; all: "
+                    "both)")
     ap.add_argument("--json", action="store_true", help="print the result as JSON")
     a = ap.parse_args(argv)
     try:
@@ -420,12 +451,20 @@ def main(argv: Optional[List[str]] = None) -> int:
     if a.episodes < 1:
         print("error: --episodes must be at least 1", file=sys.stderr)
         return 2
+    cones = CONES if a.cone == "all" else (a.cone,)
+    servos = SERVOS if a.servo == "all" else (a.servo,)
+    settings = [(c, s) for c in cones for s in servos]
+    results: List[Dict[str, Any]] = []
     try:
-        r = cross_check(a.policy, a.episodes, a.seed, a.cone, a.servo)
+        for p in a.policy:
+            results += cross_checks(p, a.episodes, a.seed, settings)
     except (ValueError, OSError, _native.EsrlError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
-    print(json.dumps(r, indent=1) if a.json else _table(r), end="")
+    if len(results) == 1:
+        print(json.dumps(results[0], indent=1) if a.json else _table(results[0]), end="")
+    else:
+        print(json.dumps(results, indent=1) if a.json else _tables(results), end="")
     return 0
 
 
