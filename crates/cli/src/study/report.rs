@@ -1,0 +1,451 @@
+//! `esrl study report`: the records of a study folder tabulated, per arm with interval
+//! estimates, arm against arm, run by run, and as the paper's Table 1.
+
+use super::{held_study, read_eval, Handover, Study};
+use anyhow::{bail, Context, Result};
+use esrl_eval::EvalReport;
+use esrl_metrics::{
+    actuator_markdown, gait_classes_text, iqm_interval, joint_markdown,
+    probability_of_improvement_interval, summarize_method, table1, table1_markdown, wilson,
+    AgentRuns, GaitClass, Interval, SeedResult, Z95,
+};
+use esrl_run::run_dir::{write_atomic, write_json_atomic};
+use esrl_run::{RunDir, Summary};
+use serde::Serialize;
+use serde_json::{json, Value};
+use std::fs;
+use std::path::Path;
+
+/// The walking bar on an evaluation: more than half of the episodes `walk` and at least
+/// 80 % reach the line.
+fn at_bar(r: &EvalReport) -> bool {
+    let n = r.mean.episodes as f64;
+    let walks = r
+        .mean
+        .gait
+        .as_ref()
+        .and_then(|g| g.cycle.as_ref())
+        .map_or(0, |c| {
+            c.gait_classes.get(&GaitClass::Walk).copied().unwrap_or(0)
+        });
+    r.mean.finished as f64 >= 0.8 * n - 1e-9 && walks as f64 > 0.5 * n
+}
+
+/// One recorded run, as the report reads it.
+struct Record {
+    arm: usize,
+    seed: u64,
+    curve: Vec<f64>,
+    q0: Option<f64>,
+    summary: Summary,
+    eval: EvalReport,
+}
+
+/// The per-run row of the report.
+#[derive(Debug, Clone, Serialize)]
+struct RunRow {
+    arm: String,
+    seed: u64,
+    at_bar: bool,
+    classes: String,
+    finished: usize,
+    falls: usize,
+    episodes: usize,
+    track_time: Option<f64>,
+    speed: f64,
+    sway: f64,
+    knee_asymmetry: f64,
+    knee_flexion_deg: Option<f64>,
+    double_support: Option<f64>,
+    /// Whether the run checked policies against the walking bar while it trained.
+    checked: bool,
+    steps_to_walk: Option<f64>,
+    time_to_walk_s: Option<f64>,
+    env_steps: u64,
+    wall_s: f64,
+    best_win_50: f64,
+}
+
+/// Largest 95th-percentile knee angle of the two knees, degrees: how far the swing knee
+/// flexes.
+fn knee_flexion(r: &EvalReport) -> Option<f64> {
+    let g = r.mean.gait.as_ref()?;
+    g.joints
+        .iter()
+        .filter(|j| j.name.contains("knee"))
+        .map(|j| j.p95.to_degrees())
+        .reduce(f64::max)
+}
+
+fn run_row(study: &Study, rec: &Record) -> RunRow {
+    let g = rec.eval.mean.gait.as_ref();
+    let finishers: Vec<f64> = rec
+        .eval
+        .episodes
+        .iter()
+        .filter_map(|e| e.gait.as_ref()?.track_time)
+        .collect();
+    let figure = |k: &str| rec.summary.learner.get(k).and_then(Value::as_f64);
+    RunRow {
+        arm: study.file.arms[rec.arm].name.clone(),
+        seed: rec.seed,
+        at_bar: at_bar(&rec.eval),
+        classes: g
+            .and_then(|g| g.cycle.as_ref())
+            .map_or("-".into(), |c| gait_classes_text(&c.gait_classes)),
+        finished: rec.eval.mean.finished,
+        falls: rec.eval.mean.falls,
+        episodes: rec.eval.mean.episodes,
+        track_time: (!finishers.is_empty())
+            .then(|| finishers.iter().sum::<f64>() / finishers.len() as f64),
+        speed: g.map_or(f64::NAN, |g| g.mean_forward_velocity),
+        sway: g.map_or(f64::NAN, |g| g.mean_abs_lateral),
+        knee_asymmetry: g.map_or(f64::NAN, |g| g.knee_torque_asymmetry),
+        knee_flexion_deg: knee_flexion(&rec.eval),
+        double_support: g.and_then(|g| g.cycle.as_ref()).map(|c| c.double_support),
+        checked: figure("checks").is_some_and(|c| c > 0.0),
+        steps_to_walk: figure("steps_to_walk"),
+        time_to_walk_s: figure("time_to_walk_s"),
+        env_steps: rec.summary.env_steps,
+        wall_s: rec.summary.wall_s,
+        best_win_50: rec.summary.curve.best_win_50,
+    }
+}
+
+fn fmt(v: Option<f64>, digits: usize) -> String {
+    v.filter(|x| x.is_finite())
+        .map_or("–".into(), |x| format!("{x:.digits$}"))
+}
+
+fn interval_text(i: &Interval, digits: usize, scale: f64) -> String {
+    format!(
+        "{:.digits$} [{:.digits$}, {:.digits$}]",
+        i.estimate * scale,
+        i.lo * scale,
+        i.hi * scale
+    )
+}
+
+pub(crate) fn report(dir: &Path, json_out: bool) -> Result<()> {
+    let study = held_study(dir)?;
+    let records = load_records(dir, &study)?;
+    if records.is_empty() {
+        bail!(
+            "{} has no records yet (`{} study status {}` says where the runs are)",
+            dir.display(),
+            esrl_run::command(),
+            dir.display()
+        );
+    }
+    let rows: Vec<RunRow> = records.iter().map(|r| run_row(&study, r)).collect();
+    let mut md = heading(dir, &study, records.len());
+    let (arms_md, arms_json) = per_arm(&study, &rows)?;
+    md.push_str(&arms_md);
+    let (poi_md, poi_json) = improvement(&study, &rows)?;
+    md.push_str(&poi_md);
+    let (runs_md, csv) = every_run(&rows);
+    md.push_str(&runs_md);
+    md.push_str(&table1_section(&study, &records)?);
+    let figures = json!({"arms": arms_json, "improvement": poi_json, "runs": rows});
+    write_atomic(&dir.join("report.md"), md.as_bytes())?;
+    write_atomic(&dir.join("report.csv"), csv.as_bytes())?;
+    write_json_atomic(&dir.join("report.json"), &figures)?;
+    if json_out {
+        println!("{}", serde_json::to_string_pretty(&figures)?);
+    } else {
+        print!("{md}");
+    }
+    eprintln!(
+        "wrote {}, {} and {} (`python -m esrl_rs.report --study {}` draws them)",
+        dir.join("report.md").display(),
+        dir.join("report.csv").display(),
+        dir.join("report.json").display(),
+        dir.display()
+    );
+    Ok(())
+}
+
+/// The written records of `study`'s runs in `dir`, in the study's order.
+fn load_records(dir: &Path, study: &Study) -> Result<Vec<Record>> {
+    let mut records = Vec::new();
+    for (k, (arm, seed, _)) in study.runs.iter().enumerate() {
+        let rec_dir = dir.join("records").join(study.run_name(k));
+        let Some(eval) = read_eval(&rec_dir)? else {
+            continue;
+        };
+        let Some(summary) = Summary::read(&rec_dir)? else {
+            continue;
+        };
+        let (curve, q0) = read_csv_curve(&rec_dir.join(RunDir::CSV))?;
+        records.push(Record {
+            arm: *arm,
+            seed: *seed,
+            curve,
+            q0,
+            summary,
+            eval,
+        });
+    }
+    Ok(records)
+}
+
+/// The title and what the numbers are.
+fn heading(dir: &Path, study: &Study, recorded: usize) -> String {
+    let planned = study.file.seeds.list().len();
+    format!(
+        "# Study: {}\n\n{} arm(s) × {planned} seed(s); {} of {} runs recorded. Each run's \
+         handed-over policy ({}) evaluated on {} deterministic episodes (reset seeds {}…). The \
+         walking bar: `walk` in more than half of the episodes and at least 80 % past the 50 m \
+         line. Intervals are 95 %: Wilson for rates, percentile bootstrap over runs (2,000 \
+         resamples) for the IQM and the probability of improvement (Agarwal et al. 2021).\n\n",
+        if study.file.description.is_empty() {
+            dir.display().to_string()
+        } else {
+            study.file.description.clone()
+        },
+        study.file.arms.len(),
+        recorded,
+        study.runs.len(),
+        match study.file.eval.policy {
+            Handover::Kept => "its kept policy, RUN/best/",
+            Handover::Last => "its last checkpoint",
+        },
+        study.file.eval.episodes,
+        study.file.eval.seed,
+    )
+}
+
+/// "Per arm": runs at the bar with the Wilson interval, the IQM Best-Win-50 and the steps to
+/// the first walk with bootstrap intervals; the same as JSON values.
+fn per_arm(study: &Study, rows: &[RunRow]) -> Result<(String, Vec<Value>)> {
+    let mut md = String::new();
+    md.push_str(
+        "## Per arm\n\n| arm | runs | at the bar | rate [95 %] | IQM Best-Win-50 [95 %] | walked \
+         in training | IQM steps to walk [95 %] |\n|---|---:|---:|---|---|---:|---|\n",
+    );
+    let mut arms_json = Vec::new();
+    for (a, arm) in study.file.arms.iter().enumerate() {
+        let mine: Vec<&RunRow> = rows.iter().filter(|r| r.arm == arm.name).collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let n = mine.len();
+        let k = mine.iter().filter(|r| r.at_bar).count();
+        let rate = wilson(k, n, Z95)?;
+        let bw: Vec<f64> = mine.iter().map(|r| r.best_win_50).collect();
+        let bw_iqm = iqm_interval(&bw, 1 + a as u64)?;
+        let walked: Vec<f64> = mine.iter().filter_map(|r| r.steps_to_walk).collect();
+        let steps_iqm = if walked.is_empty() {
+            None
+        } else {
+            Some(iqm_interval(&walked, 100 + a as u64)?)
+        };
+        let rate_text = format!(
+            "{:.0} % [{:.0}–{:.0} %]",
+            100.0 * rate.estimate,
+            100.0 * rate.lo,
+            100.0 * rate.hi
+        );
+        // Runs made without the walking check cannot say when they first walked.
+        let checked = mine.iter().filter(|r| r.checked).count();
+        let walked_text = if checked == 0 {
+            "– (no check)".to_string()
+        } else {
+            format!("{} of {checked}", walked.len())
+        };
+        md.push_str(&format!(
+            "| {} | {n} | {k} | {rate_text} | {} | {walked_text} | {} |\n",
+            arm.name,
+            interval_text(&bw_iqm, 0, 1.0),
+            steps_iqm.map_or("–".into(), |i| interval_text(&i, 2, 1e-6) + " M"),
+        ));
+        arms_json.push(json!({
+            "arm": arm.name,
+            "runs": n,
+            "at_bar": k,
+            "rate": rate,
+            "best_win_50_iqm": bw_iqm,
+            "walked_in_training": walked.len(),
+            "checked_in_training": checked,
+            "steps_to_walk_iqm": steps_iqm,
+        }));
+    }
+    Ok((md, arms_json))
+}
+
+/// "Probability of improvement" of every arm over every other, on Best-Win-50 and on
+/// meeting the bar (nothing with one arm).
+fn improvement(study: &Study, rows: &[RunRow]) -> Result<(String, Vec<Value>)> {
+    let mut md = String::new();
+    let mut poi_json = Vec::new();
+    if study.file.arms.len() > 1 {
+        md.push_str(
+            "\n## Probability of improvement\n\nP(a run of the row arm beats one of the column \
+             arm), on Best-Win-50 / on meeting the bar, with 95 % intervals.\n\n",
+        );
+        let values = |name: &str, f: &dyn Fn(&RunRow) -> f64| -> Vec<f64> {
+            rows.iter().filter(|r| r.arm == name).map(f).collect()
+        };
+        for (i, x) in study.file.arms.iter().enumerate() {
+            for (j, y) in study.file.arms.iter().enumerate() {
+                if i == j {
+                    continue;
+                }
+                let (bx, by) = (
+                    values(&x.name, &|r| r.best_win_50),
+                    values(&y.name, &|r| r.best_win_50),
+                );
+                if bx.is_empty() || by.is_empty() {
+                    continue;
+                }
+                let bar = |r: &RunRow| f64::from(u8::from(r.at_bar));
+                let (sx, sy) = (values(&x.name, &bar), values(&y.name, &bar));
+                let seed = 1000 + (i * 100 + j) as u64;
+                let p_bw = probability_of_improvement_interval(&bx, &by, seed)?;
+                let p_bar = probability_of_improvement_interval(&sx, &sy, seed + 7)?;
+                md.push_str(&format!(
+                    "- {} over {}: {} / {}\n",
+                    x.name,
+                    y.name,
+                    interval_text(&p_bw, 2, 1.0),
+                    interval_text(&p_bar, 2, 1.0)
+                ));
+                poi_json.push(json!({"arm": x.name, "over": y.name,
+                    "best_win_50": p_bw, "at_bar": p_bar}));
+            }
+        }
+    }
+    Ok((md, poi_json))
+}
+
+/// "Every run" as a Markdown table, and the same rows as `report.csv`.
+fn every_run(rows: &[RunRow]) -> (String, String) {
+    let mut md = String::new();
+    md.push_str(
+        "\n## Every run\n\n| run | at bar | gait classes | finished | falls | track time (s) | \
+         speed (m/s) | sway (m) | knee asym. | knee flexion (°) | double support | steps to \
+         walk | env steps | wall (s) |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:\
+         |---:|---:|\n",
+    );
+    let mut csv = String::from(
+        "arm,seed,at_bar,classes,finished,falls,episodes,track_time,speed,sway,knee_asymmetry,\
+         knee_flexion_deg,double_support,steps_to_walk,time_to_walk_s,env_steps,wall_s,\
+         best_win_50\n",
+    );
+    for r in rows {
+        md.push_str(&format!(
+            "| {}-s{} | {} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.0} |\n",
+            r.arm,
+            r.seed,
+            if r.at_bar { "yes" } else { "no" },
+            r.classes,
+            r.finished,
+            r.episodes,
+            r.falls,
+            fmt(r.track_time, 1),
+            fmt(Some(r.speed), 2),
+            fmt(Some(r.sway), 3),
+            fmt(Some(100.0 * r.knee_asymmetry), 1) + " %",
+            fmt(r.knee_flexion_deg, 0),
+            fmt(r.double_support.map(|d| 100.0 * d), 1) + " %",
+            r.steps_to_walk
+                .map_or("–".into(), |s| format!("{:.2} M", s / 1e6)),
+            r.env_steps,
+            r.wall_s
+        ));
+        csv.push_str(&format!(
+            "{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            r.arm,
+            r.seed,
+            r.at_bar,
+            r.classes,
+            r.finished,
+            r.falls,
+            r.episodes,
+            fmt(r.track_time, 3),
+            fmt(Some(r.speed), 4),
+            fmt(Some(r.sway), 4),
+            fmt(Some(r.knee_asymmetry), 4),
+            fmt(r.knee_flexion_deg, 2),
+            fmt(r.double_support, 4),
+            fmt(r.steps_to_walk, 0),
+            fmt(r.time_to_walk_s, 1),
+            r.env_steps,
+            fmt(Some(r.wall_s), 1),
+            fmt(Some(r.best_win_50), 2),
+        ));
+    }
+    (md, csv)
+}
+
+/// Table 1 of the arms (mean ± SD, as the paper; the one Table 1 writer), the actuators'
+/// and joints' tables, and the footnote.
+fn table1_section(study: &Study, records: &[Record]) -> Result<String> {
+    let mut md = String::new();
+    let mut agents = Vec::new();
+    for (a, arm) in study.file.arms.iter().enumerate() {
+        let mine: Vec<&Record> = records.iter().filter(|r| r.arm == a).collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let curves: Vec<Vec<f64>> = mine.iter().map(|r| r.curve.clone()).collect();
+        let summaries = summarize_method(&curves)?;
+        agents.push(AgentRuns {
+            agent: arm.name.clone(),
+            seeds: summaries
+                .into_iter()
+                .zip(&mine)
+                .map(|(summary, r)| SeedResult {
+                    summary,
+                    gait: r.eval.mean.gait.clone(),
+                    q0_mean: r.q0,
+                })
+                .collect(),
+        });
+    }
+    let table = table1(&agents)?;
+    md.push_str("\n## Table 1 (mean ± sample SD across seeds)\n\n");
+    md.push_str(&table1_markdown(&table));
+    if table.iter().any(|r| r.gait_runs > 0) {
+        md.push_str("\n## Mean |torque| and |power| per actuator (paper Fig. 5d)\n\n");
+        md.push_str(&actuator_markdown(&table));
+    }
+    if table.iter().any(|r| !r.joint_names.is_empty()) {
+        md.push_str(
+            "\n## Range of motion (5th–95th percentile) and time within 1° of a limit per \
+             joint\n\n",
+        );
+        md.push_str(&joint_markdown(&table));
+    }
+    md.push_str(
+        "\nKnee flexion: the larger of the two knees' 95th-percentile angle; knee asym.: \
+         |T_L − T_R| / ((T_L + T_R)/2) of the mean |knee torque|; steps to walk: environment \
+         steps to the first policy the walking check found at the bar during training \
+         (`checks.jsonl`); wall: training time as measured on the machine that ran it.\n",
+    );
+    Ok(md)
+}
+
+/// The `curve` and mean `q0` columns of a record's `metrics.csv`.
+fn read_csv_curve(path: &Path) -> Result<(Vec<f64>, Option<f64>)> {
+    let text = fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines
+        .next()
+        .with_context(|| format!("{} is empty", path.display()))?
+        .split(',')
+        .collect();
+    let col = |name: &str| header.iter().position(|h| *h == name);
+    let c = col("curve").with_context(|| format!("{} has no curve column", path.display()))?;
+    let q = col("q0");
+    let (mut curve, mut q0) = (Vec::new(), Vec::new());
+    for line in lines.filter(|l| !l.trim().is_empty()) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let value = |i: usize| cells.get(i).and_then(|v| v.parse::<f64>().ok());
+        curve.push(
+            value(c).with_context(|| format!("{}: a row without a curve value", path.display()))?,
+        );
+        q0.extend(q.and_then(value));
+    }
+    Ok((curve, esrl_metrics::q0_mean(&q0)))
+}
