@@ -279,6 +279,14 @@ def test_study_and_robustness_figures(tmp_path) -> None:
         {**row, "disturbance": {"kind": "friction", "value": 0.4}},
         {**row, "disturbance": {"kind": "delay", "value": 1}}]}))
     assert robustness_figure(card, tmp_path / "out", dpi=40).is_file()
+    # Two cards: one line per policy; a card without a robustness section is named.
+    other = tmp_path / "other.json"
+    other.write_text(json.dumps({"run": "s", "robustness": [
+        {**row, "disturbance": None}, {**row, "disturbance": {"kind": "contact", "value": 20}}]}))
+    assert robustness_figure([card, other], tmp_path / "both", dpi=40).is_file()
+    with pytest.raises(ValueError, match="plain.json has no robustness card"):
+        (tmp_path / "plain.json").write_text(json.dumps({"run": "r"}))
+        robustness_figure([card, tmp_path / "plain.json"], tmp_path / "both")
     (tmp_path / "plain.json").write_text(json.dumps({"run": "r"}))
     with pytest.raises(ValueError, match="no robustness card"):
         robustness_figure(tmp_path / "plain.json", tmp_path / "out")

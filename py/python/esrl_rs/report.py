@@ -539,9 +539,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--study", metavar="DIR",
                         help="a study folder (after `esrl study report DIR`): the arms' "
                              "intervals and performance profiles")
-    parser.add_argument("--robustness", metavar="EVAL_JSON",
+    parser.add_argument("--robustness", metavar="EVAL_JSON", nargs="+",
                         help="an eval.json with a robustness card (`esrl eval POLICY "
-                             "--robustness`): survival against each disturbance")
+                             "--robustness`): survival against each disturbance; several: "
+                             "their policies side by side")
     parser.add_argument("--out", required=True, metavar="DIR", help="output folder")
     parser.add_argument("--dpi", type=int, default=150, help="PNG resolution (default 150)")
     parser.add_argument("--gait", action="append", default=[], metavar="PATH",

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any, Dict, List, Union
+from typing import Any, Dict, List, Sequence, Union
 
 import numpy as np
 
@@ -181,37 +181,59 @@ def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Pa
     return files
 
 
-def robustness_figure(eval_json: PathLike, out: PathLike, dpi: int = 150) -> Path:
-    """Survival against magnitude per disturbance of an evaluation's robustness card."""
-    report = json.loads(Path(eval_json).read_text(encoding="utf-8"))
-    rows = report.get("robustness")
-    if not rows:
-        raise ValueError(f"{eval_json} has no robustness card (esrl eval POLICY --robustness)")
-    base = next((r for r in rows if r["disturbance"] is None), None)
-    kinds: Dict[str, List[Any]] = {}
-    for r in rows:
-        d = r["disturbance"]
-        if d is not None:
-            kinds.setdefault(d["kind"], []).append((float(d["value"]), r))
+def robustness_figure(eval_json: Union[PathLike, Sequence[PathLike]], out: PathLike,
+                      dpi: int = 150) -> Path:
+    """Survival against magnitude per disturbance of an evaluation's robustness card; given
+    several cards (one per policy), their "stayed up" shares side by side, one line each,
+    labelled by the card's run."""
+    paths = [eval_json] if isinstance(eval_json, (str, Path)) else list(eval_json)
+    if not paths:
+        raise ValueError("no robustness card given")
+    cards = []
+    for path in paths:
+        report = json.loads(Path(path).read_text(encoding="utf-8"))
+        if not report.get("robustness"):
+            raise ValueError(f"{path} has no robustness card (esrl eval POLICY --robustness)")
+        cards.append((report.get("run") or Path(path).parent.name, report["robustness"]))
     nominal = {"push_sagittal": 0.0, "push_lateral": 0.0, "friction": 1.0, "mass": 1.0,
-               "strength": 1.0, "slope": 0.0, "obs_noise": 0.0, "delay": 0.0}
-    if base is not None:
-        for kind, pts in kinds.items():
-            if kind in nominal:
-                pts.append((nominal[kind], base))
+               "strength": 1.0, "slope": 0.0, "obs_noise": 0.0, "delay": 0.0, "contact": 60.0}
     units = {"push_sagittal": "m/s", "push_lateral": "m/s", "friction": "coefficient",
              "mass": "scale", "strength": "scale", "slope": "degrees", "obs_noise": "SD",
-             "delay": "control steps"}
+             "delay": "control steps", "contact": "Hz"}
+
+    def by_kind(rows: List[Dict[str, Any]]) -> Dict[str, List[Any]]:
+        base = next((r for r in rows if r["disturbance"] is None), None)
+        kinds: Dict[str, List[Any]] = {}
+        for r in rows:
+            d = r["disturbance"]
+            if d is not None:
+                kinds.setdefault(d["kind"], []).append((float(d["value"]), r))
+        for kind, pts in kinds.items():
+            if base is not None and kind in nominal:
+                pts.append((nominal[kind], base))
+            pts.sort(key=lambda p: p[0])
+        return kinds
+
+    series = [(label, by_kind(rows)) for label, rows in cards]
+    names = list(dict.fromkeys(k for _, kinds in series for k in kinds))
     plt = _plt()
-    n = len(kinds)
+    n = len(names)
     cols = 4
-    fig, axes = plt.subplots((n + cols - 1) // cols, cols, figsize=(3.0 * cols, 2.4 * ((n + cols - 1) // cols)),
-                             squeeze=False)
-    for ax, (kind, pts) in zip(axes.flat, kinds.items()):
-        pts.sort(key=lambda p: p[0])
-        x = [p[0] for p in pts]
-        ax.plot(x, [p[1]["survived"] / p[1]["episodes"] for p in pts], "o-", label="stayed up")
-        ax.plot(x, [p[1]["finished"] / p[1]["episodes"] for p in pts], "s--", label="finished")
+    fig, axes = plt.subplots((n + cols - 1) // cols, cols,
+                             figsize=(3.0 * cols, 2.4 * ((n + cols - 1) // cols)), squeeze=False)
+    for ax, kind in zip(axes.flat, names):
+        for label, kinds in series:
+            pts = kinds.get(kind)
+            if not pts:
+                continue
+            x = [p[0] for p in pts]
+            up = [p[1]["survived"] / p[1]["episodes"] for p in pts]
+            if len(series) == 1:
+                ax.plot(x, up, "o-", label="stayed up")
+                ax.plot(x, [p[1]["finished"] / p[1]["episodes"] for p in pts], "s--",
+                        label="finished")
+            else:
+                ax.plot(x, up, "o-", label=label)
         ax.set_title(kind, fontsize=9)
         ax.set_xlabel(units.get(kind, ""), fontsize=8)
         ax.set_ylim(-0.05, 1.05)
@@ -219,7 +241,9 @@ def robustness_figure(eval_json: PathLike, out: PathLike, dpi: int = 150) -> Pat
     for ax in list(axes.flat)[n:]:
         ax.axis("off")
     axes.flat[0].legend(fontsize=7)
-    fig.suptitle(f"{report.get('run', '')}: share of {rows[0]['episodes']} episodes, the "
-                 "undisturbed task at the nominal value", fontsize=9)
+    episodes = cards[0][1][0]["episodes"]
+    what = (f"{cards[0][0]}: share of {episodes} episodes" if len(cards) == 1
+            else f"share of {episodes} episodes that stayed up, per policy")
+    fig.suptitle(f"{what}, the undisturbed task at the nominal value", fontsize=9)
     fig.tight_layout()
     return _save(fig, out, "robustness.png", dpi)
