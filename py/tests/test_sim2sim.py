@@ -134,3 +134,19 @@ def test_several_policies_under_every_setting(capsys) -> None:
     assert [r["mujoco_settings"] for r in results] == [
         {"cone": "pyramidal", "servo": "explicit"}, {"cone": "elliptic", "servo": "explicit"}]
     assert results[0]["esrl"] == results[1]["esrl"], "esrl's episodes are run once"
+
+
+def test_targets_follow_the_joint_ranges() -> None:
+    """`target.joint_range` widens one joint's span on MuJoCo as in esrl: q_stand + a·span,
+    clamped to the limits; the other joints keep `target.range`."""
+    walk = dict(esrl_rs.load_policy(FLAGSHIP)._core.walk_config)
+    walk["target"] = {**walk["target"], "joint_range": {"left_knee": 0.6}}
+    mj = MujocoWalk(walk)
+    names = list(mj.rust.action_names)
+    left, right = names.index("left_knee"), names.index("right_knee")
+    for a in (1.0, 0.5, -1.0):
+        t = mj._targets(np.full(len(names), a))
+        assert t[left] == pytest.approx(np.clip(mj.q_stand[left] + 0.6 * a, mj.lo[left],
+                                                mj.hi[left]))
+        assert t[right] == pytest.approx(np.clip(
+            mj.q_stand[right] + float(walk["target"]["range"]) * a, mj.lo[right], mj.hi[right]))

@@ -1,6 +1,7 @@
 //! Contract: `walk.action = "target"` (module docs of `walk`, "Action"). An action maps onto
 //! a joint angle target piecewise linearly (0 → the standing angle, ±1 → the limits); a zero
-//! action holds the standing pose for 20 s on the ground from several reset seeds; with the
+//! action holds the standing pose for 20 s on the ground from several reset seeds; `range`
+//! and a joint's `joint_range` make the targets a residual around standing; with the
 //! torso held in the air, a step of the target to half range is reached within 2° in the
 //! documented times (ankle and knee 0.15 s, hip 0.6 s); the gait data report the servo's
 //! torque and its work.
@@ -54,6 +55,34 @@ fn a_range_makes_the_targets_a_residual_around_standing() {
         (2, -1.0, -19.459_156),
     ];
     assert_targets(&env, &cases);
+}
+
+#[test]
+fn a_joint_range_replaces_the_range_for_that_joint_only() {
+    let mut cfg = config();
+    cfg.target.range = Some(0.2);
+    cfg.target.joint_range = [("left_knee".to_string(), 0.6)].into_iter().collect();
+    let env = WalkEnv::new(cfg.clone()).unwrap();
+    let knee = env.standing_pose()[1].to_degrees();
+    // The left knee spans ±0.6 rad (34.38°) around standing, the right one ±0.2 (11.46°).
+    assert_targets(
+        &env,
+        &[
+            (1, 1.0, knee + 34.377_468),
+            (1, 0.5, knee + 17.188_734),
+            (4, 1.0, knee + 11.459_156),
+            (0, 1.0, -2.0 + 11.459_156),
+        ],
+    );
+    cfg.target.joint_range = [("knee".to_string(), 0.6)].into_iter().collect();
+    let err = WalkEnv::new(cfg.clone()).err().unwrap().to_string();
+    assert!(
+        err.contains("target.joint_range") && err.contains("`knee` is not an actuated joint"),
+        "{err}"
+    );
+    cfg.target.joint_range = [("left_knee".to_string(), -0.1)].into_iter().collect();
+    let err = WalkEnv::new(cfg).err().unwrap().to_string();
+    assert!(err.contains("target.joint_range.left_knee"), "{err}");
 }
 
 #[test]

@@ -254,11 +254,18 @@ class MujocoWalk:
         return self.observation()
 
     def _targets(self, action: np.ndarray) -> np.ndarray:
+        """Joint-angle targets as esrl's ``WalkEnv::target_angle``: ``q_stand + a·span``
+        clamped to the limits where a span is set (``target.joint_range``, else
+        ``target.range``), else the limits at ±1."""
         rng = self.target.get("range")
-        if rng is not None:
-            return np.clip(self.q_stand + action * float(rng), self.lo, self.hi)
-        return np.where(action >= 0, self.q_stand + action * (self.hi - self.q_stand),
-                        self.q_stand + action * (self.q_stand - self.lo))
+        per_joint = self.target.get("joint_range") or {}
+        spans = [per_joint.get(n, rng) for n in self.rust.action_names]
+        residual = np.array([s is not None for s in spans])
+        span = np.array([float(s) if s is not None else 0.0 for s in spans])
+        to_limits = np.where(action >= 0, self.q_stand + action * (self.hi - self.q_stand),
+                             self.q_stand + action * (self.q_stand - self.lo))
+        return np.where(residual, np.clip(self.q_stand + action * span, self.lo, self.hi),
+                        to_limits)
 
     def step(self, action: Sequence[float]):
         mj, m, d = self.mujoco, self.m, self.d

@@ -192,6 +192,12 @@ pub struct TargetServo {
     /// across their whole range. Default none (±1 reach the limits).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub range: Option<f32>,
+    /// Per actuated joint (by name), a span in radians that replaces `range` for that joint:
+    /// `q* = q_stand + a·span`, clamped to its limits. The walking recipe's `range = 0.3`
+    /// stops the knees at 27° (10° standing + 17°); `{ left_knee = 0.6, right_knee = 0.6 }`
+    /// lets them bend to 44°. Default none.
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub joint_range: BTreeMap<String, f32>,
 }
 
 impl Default for TargetServo {
@@ -200,6 +206,7 @@ impl Default for TargetServo {
             stiffness: 1500.0,
             damping: 60.0,
             range: None,
+            joint_range: BTreeMap::new(),
         }
     }
 }
@@ -653,6 +660,9 @@ impl WalkConfig {
         nonneg("target.damping", self.target.damping)?;
         if let Some(r) = self.target.range {
             pos("target.range", r)?;
+        }
+        for (joint, &r) in &self.target.joint_range {
+            pos(&format!("target.joint_range.{joint}"), r)?;
         }
         if let Some(c) = &self.gait_clock {
             pos("gait_clock.period", c.period)?;

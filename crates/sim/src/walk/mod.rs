@@ -446,7 +446,8 @@ impl WalkEnv {
 
     /// The joint angle target of actuated joint `k` for action `a` in `target` mode (module
     /// docs, "Action"): the standing angle at 0, the joint's limits at ±1, linear in between
-    /// on each side; with [`TargetServo::range`], `q_stand + a·range` clamped to the limits.
+    /// on each side; with [`TargetServo::range`] (or the joint's
+    /// [`TargetServo::joint_range`]), `q_stand + a·span` clamped to the limits.
     pub fn target_angle(&self, k: usize, a: f32) -> f32 {
         let s = &self.shared;
         let stand = s.standing_q[s.actuated[k]] as f32;
@@ -456,8 +457,8 @@ impl WalkEnv {
         } else {
             0.0
         };
-        if let Some(range) = self.config().target.range {
-            return (stand + a * range).clamp(lo, hi);
+        if let Some(span) = s.target_span[k] {
+            return (stand + a * span).clamp(lo, hi);
         }
         if a >= 0.0 {
             stand + a * (hi - stand)

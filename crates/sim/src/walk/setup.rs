@@ -32,6 +32,9 @@ pub(super) struct WalkShared {
     pub(super) effort: Vec<f32>,
     /// Per actuated joint: lower and upper limit, rad (±∞ without limits).
     pub(super) range: Vec<[f32; 2]>,
+    /// Per actuated joint: the span of its `target` actions around standing, rad
+    /// (`target.joint_range`, else `target.range`); `None`: ±1 reach the limits.
+    pub(super) target_span: Vec<Option<f32>>,
     /// Standing pose, one entry per joint (URDF order).
     pub(super) standing_q: Vec<f64>,
     /// Torso origin height in the standing pose with the feet on the ground, m.
@@ -89,6 +92,7 @@ impl WalkShared {
             .map(|&j| model.joints()[j].effort as f32)
             .collect();
         let range = joint_ranges(&model, &config, &actuated)?;
+        let target_span = target_spans(&config)?;
         if config.reset.pose != ResetPose::Standing && actuated.len() % 3 != 0 {
             return Err(model_err(
                 "reset.pose",
@@ -115,6 +119,7 @@ impl WalkShared {
             passive,
             effort,
             range,
+            target_span,
             standing_q,
             standing_height,
             foot_height,
@@ -299,6 +304,38 @@ fn sim_setup(model: &RobotModel, config: &WalkConfig, actuated: &[usize]) -> Sim
         ground: true,
         armature,
     }
+}
+
+/// Per actuated joint (action order), the span of its `target` actions: its
+/// `target.joint_range` entry, else `target.range`. A `joint_range` name that is not an
+/// actuated joint is refused.
+fn target_spans(config: &WalkConfig) -> Result<Vec<Option<f32>>, SimError> {
+    let names = &config.actuated_joints;
+    if let Some(unknown) = config
+        .target
+        .joint_range
+        .keys()
+        .find(|k| !names.contains(k))
+    {
+        return Err(model_err(
+            "target.joint_range",
+            format!(
+                "`{unknown}` is not an actuated joint (they are: {})",
+                names.join(", ")
+            ),
+        ));
+    }
+    Ok(names
+        .iter()
+        .map(|n| {
+            config
+                .target
+                .joint_range
+                .get(n)
+                .copied()
+                .or(config.target.range)
+        })
+        .collect())
 }
 
 /// Per actuated joint, its `[lower, upper]` limit (±∞ without limits); `target` actions need
