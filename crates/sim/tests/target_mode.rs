@@ -68,7 +68,7 @@ fn a_joint_range_replaces_the_range_for_that_joint_only() {
     assert_targets(
         &env,
         &[
-            (1, 1.0, knee + 34.377_468),
+            (1, 1.0, knee + 34.377_47),
             (1, 0.5, knee + 17.188_734),
             (4, 1.0, knee + 11.459_156),
             (0, 1.0, -2.0 + 11.459_156),
