@@ -80,7 +80,7 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
         .unwrap_or_default();
     let typical = cfg
         .typical_time()
-        .map_or(String::new(), |t| format!("\n  time:   {t}"));
+        .map_or(String::new(), |t| format!("\n  typical: {t} (the preset's whole budget)"));
     format!(
         "esrl train {agent} · preset {preset} · env {env} · seed {seed}{action}\n  \
          budget: {budget}{steps}{typical}\n  \
