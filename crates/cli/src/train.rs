@@ -78,9 +78,9 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
         .max_env_steps
         .map(|s| format!(", at most {s} env steps"))
         .unwrap_or_default();
-    let typical = cfg
-        .typical_time()
-        .map_or(String::new(), |t| format!("\n  typical: {t} (the preset's whole budget)"));
+    let typical = cfg.typical_time().map_or(String::new(), |t| {
+        format!("\n  typical: {t} (the preset's whole budget)")
+    });
     format!(
         "esrl train {agent} · preset {preset} · env {env} · seed {seed}{action}\n  \
          budget: {budget}{steps}{typical}\n  \
