@@ -172,6 +172,11 @@ class MujocoWalk:
         self.track = float(self.cfg["track_length"])
         self.fall = self.cfg["fall"]
         self.target = self.cfg["target"]
+        # Per actuated joint, the span of its targets around standing (None: to the limits).
+        per_joint = self.target.get("joint_range") or {}
+        spans = [per_joint.get(n, self.target.get("range")) for n in names]
+        self.span_set = np.array([s is not None for s in spans])
+        self.span = np.array([float(s) if s is not None else 0.0 for s in spans])
         self.mode = self.cfg["action"]
 
     @staticmethod
@@ -257,11 +262,7 @@ class MujocoWalk:
         """Joint-angle targets as esrl's ``WalkEnv::target_angle``: ``q_stand + a·span``
         clamped to the limits where a span is set (``target.joint_range``, else
         ``target.range``), else the limits at ±1."""
-        rng = self.target.get("range")
-        per_joint = self.target.get("joint_range") or {}
-        spans = [per_joint.get(n, rng) for n in self.rust.action_names]
-        residual = np.array([s is not None for s in spans])
-        span = np.array([float(s) if s is not None else 0.0 for s in spans])
+        residual, span = self.span_set, self.span
         to_limits = np.where(action >= 0, self.q_stand + action * (self.hi - self.q_stand),
                              self.q_stand + action * (self.q_stand - self.lo))
         return np.where(residual, np.clip(self.q_stand + action * span, self.lo, self.hi),
