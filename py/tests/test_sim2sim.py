@@ -132,8 +132,20 @@ def test_several_policies_under_every_setting(capsys) -> None:
     assert main([str(FLAGSHIP), "--episodes", "1", "--cone", "all", "--json"]) == 0
     results = json.loads(capsys.readouterr().out)
     assert [r["mujoco_settings"] for r in results] == [
-        {"cone": "pyramidal", "servo": "explicit"}, {"cone": "elliptic", "servo": "explicit"}]
+        {"cone": "pyramidal", "servo": "explicit", "action": "target"},
+        {"cone": "elliptic", "servo": "explicit", "action": "target"}]
     assert results[0]["esrl"] == results[1]["esrl"], "esrl's episodes are run once"
+
+
+def test_a_torque_policy_runs_once_per_cone(capsys) -> None:
+    """A torque policy has no servo: `--servo all` runs it once per cone (not once per cone
+    and servo), in rows that say torques, not a servo."""
+    torque = FLAGSHIP.parents[1] / "torque" / "records" / "torque-s0" / "policy"
+    assert main([str(torque), "--episodes", "1", "--cone", "all", "--servo", "all"]) == 0
+    out = capsys.readouterr().out
+    for cone in ("pyramidal", "elliptic"):
+        assert out.count(f"| MuJoCo, {cone} cone, torques |") == 1
+    assert "servo |" not in out
 
 
 def test_targets_follow_the_joint_ranges() -> None:

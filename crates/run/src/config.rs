@@ -95,13 +95,18 @@ pub enum Preset {
     /// `quick` with 5× the gradient updates per generation and 895 generations (the run of
     /// `results/README.md`'s `inner1000-s0`, made on the physics before `fade` limits).
     Long,
-    /// The default: the walking recipe of `results/walking`: `quick`'s networks on
-    /// joint-angle targets around the standing pose, alive bonus 0.25, a gait clock that also prices foot
+    /// The walking recipe of `results/walking`: `quick`'s networks on joint-angle targets
+    /// around the standing pose, alive bonus 0.25, a gait clock that also prices foot
     /// chatter, a track that goes on past the 50 m line with speed paid up to 1.1 m/s,
     /// clipped TD targets, 0.25 gradient updates per environment step, 4 million environment
     /// steps, the kept policy chosen by a deterministic walking check from 10 starts.
-    #[default]
     Walking,
+    /// The default: `walking` on the paper's torque actions (τ = a · effort) instead of
+    /// joint-angle targets, stopping at the first policy at the walking bar (`--until walk`;
+    /// at most the 4 M env steps, which end the run before any generation cap):
+    /// `results/torque`.
+    #[default]
+    WalkingTorque,
     /// Seconds: tiny budget and networks, for tests.
     Smoke,
 }
@@ -126,11 +131,12 @@ impl EnvKind {
 
 impl Preset {
     /// Every preset.
-    pub const ALL: [Preset; 5] = [
+    pub const ALL: [Preset; 6] = [
         Preset::Paper,
         Preset::Quick,
         Preset::Long,
         Preset::Walking,
+        Preset::WalkingTorque,
         Preset::Smoke,
     ];
 
@@ -146,6 +152,7 @@ impl Preset {
             Preset::Quick => "quick",
             Preset::Long => "long",
             Preset::Walking => "walking",
+            Preset::WalkingTorque => "walking-torque",
             Preset::Smoke => "smoke",
         }
     }
@@ -159,6 +166,7 @@ impl Preset {
             Preset::Quick => include_str!("../presets/quick.toml"),
             Preset::Long => include_str!("../presets/long.toml"),
             Preset::Walking => include_str!("../presets/walking.toml"),
+            Preset::WalkingTorque => include_str!("../presets/walking-torque.toml"),
             Preset::Smoke => include_str!("../presets/smoke.toml"),
         }
     }
@@ -186,7 +194,7 @@ impl AgentKind {
 /// `esrl train`).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overrides {
-    /// The preset underneath. Default `walking`.
+    /// The preset underneath. Default `walking-torque`.
     pub preset: Preset,
     /// TOML file laid over the preset (any subset of `config.toml`'s keys). A file that
     /// names another `preset` (a run's `config.toml` does) is laid over that one.
@@ -344,12 +352,15 @@ impl TrainConfig {
     /// where nothing was measured.
     pub fn typical_time(&self) -> Option<&'static str> {
         match (self.preset, self.env, self.agent) {
+            (Preset::WalkingTorque, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_WALKING_TORQUE),
             (Preset::Walking, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_WALKING),
             (Preset::Quick, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_QUICK),
             (Preset::Paper, EnvKind::Walk, a) if a.is_hybrid() => Some(TIME_PAPER),
-            (Preset::Walking | Preset::Paper, EnvKind::Pendulum, AgentKind::Sac) => {
-                Some(TIME_PENDULUM)
-            }
+            (
+                Preset::WalkingTorque | Preset::Walking | Preset::Paper,
+                EnvKind::Pendulum,
+                AgentKind::Sac,
+            ) => Some(TIME_PENDULUM),
             _ => None,
         }
     }
@@ -535,7 +546,12 @@ impl TrainConfig {
     }
 }
 
-/// The default command's time (`esrl train es-sac`, preset `walking`), from the step rates
+/// The default command's time (`esrl train es-sac`, preset `walking-torque`: until the first
+/// policy at the walking bar), from the wall times of `results/torque`'s seed study: each run
+/// at one thread, two side by side on a 2-core Intel Xeon.
+pub const TIME_WALKING_TORQUE: &str =
+    "until the first walk: 8-37 min (median 18) of one core each, two runs side by side, in the 7 of 8 seeds of results/torque that walked; 46 min for the whole 4 M env steps in the seed that did not";
+/// `--preset walking`'s time (its whole 4 M env steps), from the step rates
 /// measured on the two 2-core machines of `results/speed/`: an AMD EPYC (80,000 steps in
 /// 39.5 s at 2 threads, so 4 M steps in about 33 min; two full runs side by side at one
 /// thread each took 72–73 min) and an Intel Xeon (1,400–1,630 steps/s at 2 threads, early

@@ -6,7 +6,7 @@ mod common;
 
 use common::{options, without_preset_name};
 use esrl_agents::LearnEvery;
-use esrl_run::{AgentKind, EnvKind, Preset, TrainConfig};
+use esrl_run::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
 use std::path::PathBuf;
 
 #[test]
@@ -73,4 +73,38 @@ fn plain_agents_learn_at_the_same_ratio_within_the_same_steps() {
     assert!(quick.walk.gait_clock.is_none());
     assert!(quick.walk.end_at_finish && quick.walk.reward.forward_cap.is_none());
     assert!(!quick.rl.clip_targets);
+}
+
+/// The default preset is `walking` on torque actions that stops at the first walk, with the
+/// generation cap lifted: those keys and nothing else, for every agent on the walking env,
+/// and the pendulum's settings are `walking`'s.
+#[test]
+fn the_default_is_walking_on_torques_until_the_first_walk() {
+    assert_eq!(Preset::default(), Preset::WalkingTorque);
+    for agent in AgentKind::ALL {
+        let walking =
+            TrainConfig::resolve(agent, &options(Preset::Walking, None, None), Some(0)).unwrap();
+        let torque = TrainConfig::resolve(agent, &Overrides::default(), Some(0)).unwrap();
+        assert_eq!(torque.preset, Preset::WalkingTorque);
+        let differ = esrl_run::config::config_differences(&walking, &torque).unwrap();
+        assert_eq!(
+            differ,
+            [
+                "generations: 3000 vs 20000",
+                "preset: \"walking\" vs \"walking-torque\"",
+                "stop_at_walk: none vs true",
+                "walk.action: \"target\" vs \"torque\"",
+            ],
+            "{agent:?}"
+        );
+        let on = |preset| {
+            let o = Overrides {
+                preset,
+                env: Some(EnvKind::Pendulum),
+                ..Overrides::default()
+            };
+            without_preset_name(&TrainConfig::resolve(agent, &o, Some(0)).unwrap())
+        };
+        assert_eq!(on(Preset::WalkingTorque), on(Preset::Walking), "{agent:?}");
+    }
 }

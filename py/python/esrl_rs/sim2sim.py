@@ -387,14 +387,19 @@ def cross_checks(path: str, episodes: int, seed: int,
         return (g.get("cycle") or {}).get("gait_class") if g is not None else "fall"
 
     out = []
+    done = set()
     for cone, servo in settings:
         env = MujocoWalk(walk, cone=cone, servo=servo)
+        # A torque policy has no servo: every servo setting runs the same episodes.
+        if (cone, env.servo) in done:
+            continue
+        done.add((cone, env.servo))
         track = float(env.track)
         mj = [metrics.gait_metrics(env.episode(policy, seed + k), track_length=track)
               for k in range(episodes)]
         out.append({
             "policy": os.fspath(path), "seed": seed, "episodes": episodes,
-            "mujoco_settings": {"cone": cone, "servo": env.servo},
+            "mujoco_settings": {"cone": cone, "servo": env.servo, "action": env.mode},
             "esrl": _summary(ours), "mujoco": _summary(mj),
             "per_episode": [{
                 "seed": seed + k, "esrl": cls(g), "mujoco": cls(m),
@@ -429,7 +434,8 @@ def _tables(results: Sequence[Dict[str, Any]]) -> str:
             parts += [f"{r['policy']} ({r['episodes']} starts from reset seed {r['seed']})", "",
                       _HEADER, _row("esrl (Rapier)", r["esrl"])]
         st = r["mujoco_settings"]
-        parts.append(_row(f"MuJoCo, {st['cone']} cone, {st['servo']} servo", r["mujoco"]))
+        how = f"{st['servo']} servo" if st.get("action", "target") == "target" else "torques"
+        parts.append(_row(f"MuJoCo, {st['cone']} cone, {how}", r["mujoco"]))
     return "\n".join(parts) + "\n"
 
 

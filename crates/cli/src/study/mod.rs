@@ -13,7 +13,7 @@
 //!
 //! [[arm]]
 //! name = "default"
-//! agent = "es-sac"                # preset "walking" unless `preset` says otherwise
+//! agent = "es-sac"                # preset "walking-torque" unless `preset` says otherwise
 //!
 //! [[arm]]
 //! name = "mirror"
@@ -140,7 +140,7 @@ pub struct Arm {
     pub name: String,
     /// The agent.
     pub agent: AgentKind,
-    /// The preset underneath (default `walking`).
+    /// The preset underneath (default `walking-torque`).
     #[serde(default)]
     pub preset: Option<Preset>,
     /// A TOML file laid over the preset, relative to the study file.
