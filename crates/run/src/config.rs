@@ -550,7 +550,7 @@ impl TrainConfig {
 /// policy at the walking bar), from the wall times of `results/torque`'s seed study: each run
 /// at one thread, two side by side on a 2-core Intel Xeon.
 pub const TIME_WALKING_TORQUE: &str =
-    "until the first walk: 8-37 min (median 18) of one core each, two runs side by side, in the 7 of 8 seeds of results/torque that walked; 46 min for the whole 4 M env steps in the seed that did not";
+    "until the first walk: 8-37 min (median 20) of one core each, two runs side by side, in the 8 of 10 seeds of results/torque that walked; 45-52 min for the whole 4 M env steps in the two that did not";
 /// `--preset walking`'s time (its whole 4 M env steps), from the step rates
 /// measured on the two 2-core machines of `results/speed/`: an AMD EPYC (80,000 steps in
 /// 39.5 s at 2 threads, so 4 M steps in about 33 min; two full runs side by side at one
