@@ -547,10 +547,12 @@ impl TrainConfig {
 }
 
 /// The default command's time (`esrl train es-sac`, preset `walking-torque`: until the first
-/// policy at the walking bar), from the wall times of `results/torque`'s seed study: each run
-/// at one thread, two side by side on a 2-core Intel Xeon.
+/// policy at the walking bar) at `--threads 2` on an idle 2-core Intel Xeon, measured on
+/// seeds 4, 1 and 5 of `results/torque`'s seed study (`results/speed`, "Time to walk of the
+/// default command"); the median over its ten seeds follows from their steps to the first
+/// walk, and the whole budget from the measured step rate (2,620–2,750 env steps/s).
 pub const TIME_WALKING_TORQUE: &str =
-    "until the first walk: 8-37 min (median 20) of one core each, two runs side by side, in the 8 of 10 seeds of results/torque that walked; 45-52 min for the whole 4 M env steps in the two that did not";
+    "until the first walk: 5-20 min at --threads 2 on an idle 2-core machine (5, 8 and 15 min measured on three seeds; median over ten seeds about 11 min, 8 of 10 walk), about 25 min for the whole 4 M env steps when no walk comes";
 /// `--preset walking`'s time (its whole 4 M env steps), from the step rates
 /// measured on the two 2-core machines of `results/speed/`: an AMD EPYC (80,000 steps in
 /// 39.5 s at 2 threads, so 4 M steps in about 33 min; two full runs side by side at one
