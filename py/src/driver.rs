@@ -241,9 +241,7 @@ impl PyDriver {
                 let cfg: &TrainConfig = &plan.cfg;
                 let envs = build::envs(cfg.env, &cfg.walk)?;
                 cfg.check_memory(envs.obs_dim, envs.act_dim, envs.max_episode_steps)?;
-                let make = envs.make.clone();
-                let learner = build::learner_with(cfg, &envs, shared)?;
-                Session::open(cfg, &plan.root, learner, make, plan.resume)
+                Session::open(cfg, &plan.root, &envs, shared, plan.resume)
             })
             .map_err(run_error)?;
         Ok(Self {

@@ -81,9 +81,16 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
     let typical = cfg.typical_time().map_or(String::new(), |t| {
         format!("\n  typical: {t} (the preset's whole budget)")
     });
+    let restart = cfg.restart.as_ref().map_or(String::new(), |r| {
+        format!(
+            "\n  restart: from seed + 1000 (at most {} time(s)) when no walk and no check past \
+             {} m by {} env steps",
+            r.max, r.min_distance, r.at_steps
+        )
+    });
     format!(
         "esrl train {agent} · preset {preset} · env {env} · seed {seed}{action}\n  \
-         budget: {budget}{steps}{typical}\n  \
+         budget: {budget}{steps}{typical}{restart}\n  \
          run:    {dir} (config.toml, metrics.csv, checkpoint/ every {every} rows)\n  \
          stop:   Ctrl-C or SIGTERM finishes the current {unit}, checkpoints and exits; \
          continue with `{esrl} train {agent} --resume {dir}`\n  \
@@ -109,8 +116,8 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
 pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> Result<bool> {
     let envs = build::envs(cfg.env, &cfg.walk)?;
     cfg.check_memory(envs.obs_dim, envs.act_dim, envs.max_episode_steps)?;
-    let learner = build::learner(cfg, &envs)?;
-    let (mut training, opening) = Session::open(cfg, root, learner, envs.make.clone(), resume)?;
+    let evaluator = build::local_evaluator(&envs);
+    let (mut training, opening) = Session::open(cfg, root, &envs, evaluator, resume)?;
     if let Opening::Resumed {
         checkpoint,
         rows,
@@ -152,6 +159,14 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
                 return Err(e.into());
             }
         };
+        if let (Some(restart), Some(rule)) = (&row.restarted, &cfg.restart) {
+            let text = restart.describe(rule, training.attempt().seed);
+            if bar.is_hidden() {
+                eprintln!("{text}");
+            } else {
+                bar.println(text);
+            }
+        }
         bar.set_position(row.rows as u64);
         bar.set_message(format!("{} | best so far {:.1}", row.summary, row.best));
         let measured = row.rows - rows_at_start;
@@ -230,6 +245,18 @@ fn closing(cfg: &TrainConfig, root: &Path, training: &Session) -> String {
     let dir = root.display();
     let best = root.join(esrl_run::checkpoint::BEST);
     let mut out = String::new();
+    let attempt = training.attempt();
+    if !attempt.earlier.is_empty() {
+        let (steps, wall) = attempt.spent();
+        out += &format!(
+            "  restarts: {} attempt(s) abandoned ({steps} env steps, {} of training, in \
+             {dir}/restarts/); the run below is seed {}'s, and the times to walk count the \
+             abandoned attempts\n",
+            attempt.earlier.len(),
+            human_duration(wall),
+            attempt.seed
+        );
+    }
     match (training.kept_check(), best.is_dir()) {
         (Some(k), _) => {
             out += &format!(

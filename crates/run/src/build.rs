@@ -120,11 +120,12 @@ pub fn pool(threads: usize) -> Result<rayon::ThreadPool> {
 /// training session installs one of `cfg.threads`): the hybrid loop evaluates its populations
 /// there.
 pub fn learner(cfg: &TrainConfig, envs: &Envs) -> Result<AnyLearner> {
-    learner_with(
-        cfg,
-        envs,
-        Arc::new(LocalEvaluator::on_calling_pool(envs.make.clone())),
-    )
+    learner_with(cfg, envs, local_evaluator(envs))
+}
+
+/// The evaluator that rolls populations out in this process, on the calling thread pool.
+pub fn local_evaluator(envs: &Envs) -> Arc<dyn Evaluator> {
+    Arc::new(LocalEvaluator::on_calling_pool(envs.make.clone()))
 }
 
 /// A fresh learner of `cfg` whose populations `evaluator` rolls out (a [`WireEvaluator`]

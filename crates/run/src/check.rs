@@ -523,6 +523,9 @@ pub struct CheckState {
     pub kept: Option<CheckRecord>,
     /// The first check that met the walking bar.
     pub first_walk: Option<CheckRecord>,
+    /// The longest mean distance of a check so far, metres (`[restart]` judges it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub best_distance: Option<f64>,
 }
 
 impl CheckState {

@@ -7,6 +7,7 @@
 use crate::bail;
 use crate::check::CheckConfig;
 use crate::error::{Context, Result};
+use crate::restart::RestartConfig;
 use esrl_agents::{Algo, NetConfig, RlConfig};
 use esrl_es::EsConfig;
 use esrl_sim::WalkConfig;
@@ -255,6 +256,11 @@ pub struct TrainConfig {
     /// Needs `[check]`. Default false.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub stop_at_walk: bool,
+    /// Start the run over from another seed when it has not got going (`[restart]`, module
+    /// [`crate::restart`]): no walk and no check past a distance by a number of env steps.
+    /// Needs `[check]`. Default none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub restart: Option<RestartConfig>,
     /// Every this many environment steps, keep a copy of `RUN/best/` as it stands then in
     /// `RUN/best-<steps>/` (e.g. `best-2M`), so the policy a run kept at each point of its
     /// budget can be evaluated after `best/` has moved on. Default none.
@@ -297,6 +303,7 @@ impl TrainConfig {
             checkpoint_every: 10,
             check: None,
             stop_at_walk: false,
+            restart: None,
             best_every_steps: None,
             walk: WalkConfig::default(),
             network: NetConfig::default(),
@@ -471,6 +478,14 @@ impl TrainConfig {
         Ok(toml::to_string_pretty(self)?)
     }
 
+    /// The same configuration with another seed (an attempt of `[restart]`).
+    pub fn with_seed(&self, seed: u64) -> Self {
+        Self {
+            seed,
+            ..self.clone()
+        }
+    }
+
     /// Checks every field, naming the first that cannot work.
     pub fn validate(&self) -> Result<()> {
         if self.agent.is_hybrid() && self.generations == 0 {
@@ -529,6 +544,15 @@ impl TrainConfig {
                 "stop_at_walk (--until walk) needs the walking check: a `[check]` table on the \
                  walking task (the `walking` preset has one)"
             );
+        }
+        if let Some(restart) = &self.restart {
+            restart.validate()?;
+            if self.check.is_none() || self.env != EnvKind::Walk {
+                bail!(
+                    "[restart] needs the walking check: a `[check]` table on the walking task \
+                     (the rule is judged on its checks)"
+                );
+            }
         }
         if self.best_every_steps == Some(0) {
             bail!("best_every_steps = 0: must be ≥ 1 (or left out)");

@@ -12,7 +12,8 @@
 //!   folder: metrics, summary, `RUN/best/`, checkpoints; [`session`]: [`Session`], the
 //!   training of either kind of learner, for front ends.
 //! - [`check`]: the walking check, a deterministic multi-start evaluation against the
-//!   walking bar that chooses `RUN/best/` and times the first walk.
+//!   walking bar that chooses `RUN/best/` and times the first walk; [`restart`]: a run
+//!   started over from another seed when its checks show it has not got going.
 //! - [`checkpoint`], [`run_dir`], [`summary`]: the files, written atomically and verified
 //!   before they are trusted.
 //!
@@ -22,9 +23,9 @@
 //!
 //! let cfg = TrainConfig::resolve(AgentKind::EsSac, &Overrides::default(), Some(0))?;
 //! let envs = build::envs(cfg.env, &cfg.walk)?;
-//! let learner = build::learner(&cfg, &envs)?;
+//! let evaluator = build::local_evaluator(&envs);
 //! let dir = Path::new("runs/es-sac-s0");
-//! let (mut session, _) = Session::open(&cfg, dir, learner, envs.make.clone(), false)?;
+//! let (mut session, _) = Session::open(&cfg, dir, &envs, evaluator, false)?;
 //! while !session.done() {
 //!     println!("{}", session.step()?.summary);
 //! }
@@ -36,7 +37,7 @@
 //!
 //! # Limitations
 //!
-//! - A run folder belongs to one process at a time; nothing locks it.
+//! - A run folder belongs to one process at a time: it is locked (`RUN/.lock`) while trained.
 //! - A checkpoint is written every `checkpoint_every` rows and at the end: a kill loses the
 //!   rows since the last one (they are recomputed, bit for bit, on resume).
 //! - Checkpoints are bit-exact only on the machine kind that wrote them (see `esrl-nn`'s
@@ -50,6 +51,7 @@ pub mod config;
 mod error;
 pub mod pace;
 pub mod plan;
+pub mod restart;
 pub mod run_dir;
 pub mod session;
 pub mod summary;

@@ -2,17 +2,19 @@
 //! of the hybrid loop and dispatches to it, so a front end (the `esrl` binary, the Python
 //! driver) drives both with the same code and no generics. It also times the session: once
 //! the first rows give a pace, the row that establishes it carries an [`Estimate`] of the
-//! time left ([`RowDone::estimate`]), which every front end prints the same way.
+//! time left ([`RowDone::estimate`]), which every front end prints the same way. It builds
+//! the learner itself, from the seed of the run's current attempt, so that `[restart]`
+//! (module [`crate::restart`]) can start the run over with a new one.
 
-use crate::build::AnyLearner;
+use crate::build::{self, AnyLearner, Envs};
 use crate::check::CheckRecord;
 use crate::config::TrainConfig;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::pace::Estimate;
-use crate::training::{Opening, RowDone, Training};
+use crate::restart::{self, Restart};
+use crate::training::{Attempt, Opening, RowDone, Training};
 use esrl_agents::{Learner, Trainer};
-use esrl_es::Hybrid;
-use esrl_sim::MakeEnv;
+use esrl_es::{Evaluator, Hybrid};
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
@@ -26,6 +28,11 @@ pub struct Session {
     estimated: bool,
     /// The environment-step budget, if any.
     step_budget: Option<u64>,
+    /// The run's configuration, its environments and the evaluator of its populations: what
+    /// a restart builds the next learner from.
+    cfg: TrainConfig,
+    envs: Envs,
+    evaluator: Arc<dyn Evaluator>,
 }
 
 /// The training inside a [`Session`].
@@ -47,21 +54,31 @@ macro_rules! each {
 }
 
 impl Session {
-    /// [`Training::open`] for the learner inside `learner`.
+    /// [`Training::open`] for the learner of `cfg` ([`build::learner_with`], its populations
+    /// rolled out by `evaluator`): of the run's own seed, or, in a resumed run that
+    /// `[restart]` started over, of its current attempt's.
     pub fn open(
         cfg: &TrainConfig,
         root: &Path,
-        learner: AnyLearner,
-        envs: Arc<MakeEnv>,
+        envs: &Envs,
+        evaluator: Arc<dyn Evaluator>,
         resume: bool,
     ) -> Result<(Self, Opening)> {
+        let earlier = if resume {
+            restart::read(root)?
+        } else {
+            Vec::new()
+        };
+        let attempt = Attempt::after(cfg.seed, earlier)?;
+        let learner = build::learner_with(&cfg.with_seed(attempt.seed), envs, evaluator.clone())?;
+        let make = envs.make.clone();
         let (training, opening) = match learner {
             AnyLearner::Plain(t) => {
-                let (t, o) = Training::open(cfg, root, *t, envs, resume)?;
+                let (t, o) = Training::open_attempt(cfg, root, *t, make, resume, attempt)?;
                 (Either::Plain(Box::new(t)), o)
             }
             AnyLearner::Hybrid(h) => {
-                let (t, o) = Training::open(cfg, root, *h, envs, resume)?;
+                let (t, o) = Training::open_attempt(cfg, root, *h, make, resume, attempt)?;
                 (Either::Hybrid(Box::new(t)), o)
             }
         };
@@ -71,6 +88,9 @@ impl Session {
             start: (rows, steps, Instant::now()),
             estimated: false,
             step_budget: cfg.max_env_steps,
+            cfg: cfg.clone(),
+            envs: envs.clone(),
+            evaluator,
         };
         Ok((session, opening))
     }
@@ -85,13 +105,44 @@ impl Session {
 
     /// [`Training::step`]: runs one row and writes it; the row that first gives a pace
     /// carries the [`Estimate`] of the time left.
+    /// Before the row, `[restart]` may abandon the attempt and start the run over
+    /// ([`RowDone::restarted`]).
     pub fn step(&mut self) -> Result<RowDone> {
+        let restarted = self.restart_if_due()?;
         let mut row = each!(&mut self.training, t => t.step())?;
+        row.restarted = restarted;
         if !self.estimated {
             row.estimate = self.estimate();
             self.estimated = row.estimate.is_some();
         }
         Ok(row)
+    }
+
+    /// Abandons the attempt and starts the next one when `[restart]`'s rule says so
+    /// ([`Training::restart_due`]); returns the abandoned attempt's record.
+    fn restart_if_due(&mut self) -> Result<Option<Restart>> {
+        if !each!(&mut self.training, t => t.restart_due())? {
+            return Ok(None);
+        }
+        let (record, next) = each!(&mut self.training, t => t.abandon())?;
+        let cfg = self.cfg.with_seed(next.seed);
+        let learner = build::learner_with(&cfg, &self.envs, self.evaluator.clone())?;
+        match (&mut self.training, learner) {
+            (Either::Plain(t), AnyLearner::Plain(l)) => t.start_over(*l, next)?,
+            (Either::Hybrid(t), AnyLearner::Hybrid(h)) => t.start_over(*h, next)?,
+            _ => {
+                return Err(Error::Msg(
+                    "a restart built a learner of another kind than the run's".into(),
+                ))
+            }
+        }
+        self.start = (0, 0, Instant::now());
+        Ok(Some(record))
+    }
+
+    /// Which attempt of the run trains now (`[restart]`).
+    pub fn attempt(&self) -> &Attempt {
+        each!(&self.training, t => t.attempt())
     }
 
     /// The time left from the pace since the session opened ([`Estimate::from_pace`]).

@@ -8,6 +8,7 @@ use crate::check::{CheckRecord, CheckState, Checker, Trigger};
 use crate::checkpoint::{self, BestInfo, RunState};
 use crate::config::{EnvKind, TrainConfig};
 use crate::error::{Context, Error, Result};
+use crate::restart::{self, Restart};
 use crate::run_dir::{append_jsonl, truncate_jsonl, write_atomic, RunDir};
 use crate::summary::Summary;
 use esrl_agents::{AgentError, Learner, Row};
@@ -50,6 +51,9 @@ pub struct RowDone {
     /// A walking check that finished while this row ran: of the policy of the row before,
     /// when that one was due a check.
     pub check: Option<CheckRecord>,
+    /// The attempt abandoned before this row, when `[restart]` started the run over
+    /// ([`crate::Session::step`]; a [`Training`] alone leaves it `None`).
+    pub restarted: Option<Restart>,
     /// The time the session has left, on the row that first gives a pace
     /// ([`crate::Session::step`]; a [`Training`] alone leaves it `None`).
     pub estimate: Option<crate::pace::Estimate>,
@@ -74,6 +78,43 @@ pub struct Training<L: Learner> {
     _lock: std::fs::File,
     /// The check due after the last row, run beside the next one.
     due: Option<Due>,
+    /// Which attempt of the run this is (`[restart]`).
+    attempt: Attempt,
+}
+
+/// Which attempt of a run a [`Training`] trains (module [`crate::restart`]): its seed and the
+/// attempts abandoned before it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Attempt {
+    /// The seed the learner and the checks were built from.
+    pub seed: u64,
+    /// The abandoned attempts, oldest first.
+    pub earlier: Vec<Restart>,
+}
+
+impl Attempt {
+    /// The run's first attempt, of its own seed.
+    pub fn first(seed: u64) -> Self {
+        Self {
+            seed,
+            earlier: Vec::new(),
+        }
+    }
+
+    /// The attempt after `earlier` of a run of `seed` ([`restart::attempt_seed`]).
+    pub fn after(seed: u64, earlier: Vec<Restart>) -> Result<Self> {
+        Ok(Self {
+            seed: restart::attempt_seed(seed, earlier.len())?,
+            earlier,
+        })
+    }
+
+    /// Environment steps and seconds of the abandoned attempts.
+    pub fn spent(&self) -> (u64, f64) {
+        self.earlier
+            .iter()
+            .fold((0, 0.0), |(s, w), r| (s + r.env_steps, w + r.wall_s))
+    }
 }
 
 /// A policy due a walking check, and the row it comes from.
@@ -145,9 +186,22 @@ impl<L: Learner> Training<L> {
     pub fn open(
         cfg: &TrainConfig,
         root: &Path,
+        learner: L,
+        envs: Arc<MakeEnv>,
+        resume: bool,
+    ) -> Result<(Self, Opening)> {
+        Self::open_attempt(cfg, root, learner, envs, resume, Attempt::first(cfg.seed))
+    }
+
+    /// [`Training::open`] for `attempt` of the run, its `learner` built from the attempt's
+    /// seed ([`crate::Session`] does this for runs with `[restart]`).
+    pub fn open_attempt(
+        cfg: &TrainConfig,
+        root: &Path,
         mut learner: L,
         envs: Arc<MakeEnv>,
         resume: bool,
+        attempt: Attempt,
     ) -> Result<(Self, Opening)> {
         let pool = crate::build::pool(cfg.threads)?;
         let lock = lock_run(root)?;
@@ -178,15 +232,7 @@ impl<L: Learner> Training<L> {
             }
             (false, _) => (RunDir::create(root, &cfg.to_toml()?)?, Opening::New),
         };
-        let checker = match (&cfg.check, cfg.env) {
-            (Some(check), EnvKind::Walk) => Some(Checker::new(
-                check.clone(),
-                crate::build::load_model(&cfg.walk)?,
-                cfg.walk.clone(),
-                cfg.seed,
-            )),
-            _ => None,
-        };
+        let checker = Self::checker(cfg, attempt.seed)?;
         if checker.is_some() {
             let state = state.check.get_or_insert_with(CheckState::default);
             truncate_jsonl(&root.join(CHECKS_FILE), state.records)?;
@@ -208,9 +254,100 @@ impl<L: Learner> Training<L> {
                 checker,
                 _lock: lock,
                 due: None,
+                attempt,
             },
             opening,
         ))
+    }
+
+    /// The walking check of `cfg`, its starts drawn from `seed`, for runs that check.
+    fn checker(cfg: &TrainConfig, seed: u64) -> Result<Option<Checker>> {
+        Ok(match (&cfg.check, cfg.env) {
+            (Some(check), EnvKind::Walk) => Some(Checker::new(
+                check.clone(),
+                crate::build::load_model(&cfg.walk)?,
+                cfg.walk.clone(),
+                seed,
+            )),
+            _ => None,
+        })
+    }
+
+    /// Which attempt of the run this is.
+    pub fn attempt(&self) -> &Attempt {
+        &self.attempt
+    }
+
+    /// The longest mean distance of this attempt's checks so far, metres.
+    pub fn best_distance(&self) -> Option<f64> {
+        self.state.check.as_ref()?.best_distance
+    }
+
+    /// Whether `[restart]` abandons this attempt before the next row ([`restart`] module
+    /// docs). The check still due of the last row is run first, so the rule sees every
+    /// check of the rows done, as a resumed run's does.
+    pub fn restart_due(&mut self) -> Result<bool> {
+        let Some(rule) = self.cfg.restart.clone() else {
+            return Ok(false);
+        };
+        let due = |t: &Self| {
+            rule.due(
+                t.learner.env_steps(),
+                t.attempt.earlier.len(),
+                t.first_walk().is_some(),
+                t.best_distance(),
+            )
+        };
+        if !due(self) {
+            return Ok(false);
+        }
+        self.flush_check()?;
+        Ok(due(self))
+    }
+
+    /// Abandons this attempt: writes its summary, records it in `RUN/restarts.json` and moves
+    /// its files into `RUN/restarts/seed-S/` ([`restart::abandon`]). Returns its record and
+    /// the next attempt, which [`Training::start_over`] trains.
+    pub fn abandon(&mut self) -> Result<(Restart, Attempt)> {
+        self.flush_check()?;
+        self.write_summary(false)?;
+        let record = Restart {
+            seed: self.attempt.seed,
+            env_steps: self.learner.env_steps(),
+            wall_s: self.wall_s(),
+            rows: self.state.rows,
+            checks: self.state.check.as_ref().map_or(0, |c| c.records),
+            best_distance: self.best_distance(),
+            folder: Restart::folder_of(self.attempt.seed),
+            settled: false,
+        };
+        let mut earlier = self.attempt.earlier.clone();
+        restart::abandon(&self.root, &mut earlier, record)?;
+        let record = earlier
+            .last()
+            .cloned()
+            .expect("abandon recorded the attempt");
+        Ok((record, Attempt::after(self.cfg.seed, earlier)?))
+    }
+
+    /// Starts the run over in its folder with `learner` (built from `attempt`'s seed) after
+    /// [`Training::abandon`]: a fresh run state, logs and checks, the same lock and threads.
+    pub fn start_over(&mut self, learner: L, attempt: Attempt) -> Result<()> {
+        self.due = None;
+        checkpoint::remove_best(&self.root)?;
+        self.run = RunDir::resume(&self.root, 0)?;
+        self.state = RunState::fresh();
+        self.checker = Self::checker(&self.cfg, attempt.seed)?;
+        if self.checker.is_some() {
+            self.state.check = Some(CheckState::default());
+            truncate_jsonl(&self.root.join(CHECKS_FILE), 0)?;
+        }
+        self.learner = learner;
+        self.attempt = attempt;
+        self.started = Instant::now();
+        self.wall0 = 0.0;
+        self.learner.prepare(self.envs.as_ref())?;
+        Ok(())
     }
 
     /// The learner.
@@ -341,6 +478,7 @@ impl<L: Learner> Training<L> {
             summary: row.summary(),
             check,
             estimate: None,
+            restarted: None,
         })
     }
 
@@ -392,6 +530,8 @@ impl<L: Learner> Training<L> {
         let kept = state.kept.as_ref().is_none_or(|k| result.beats(&k.result));
         state.seconds += seconds;
         state.env_steps += result.check_steps;
+        let d = result.mean_distance;
+        state.best_distance = Some(state.best_distance.map_or(d, |b| b.max(d)));
         let record = CheckRecord {
             row: due.row,
             env_steps: due.env_steps,
@@ -467,6 +607,19 @@ impl<L: Learner> Training<L> {
             if let Some(v) = value {
                 learner.insert(name.into(), Value::from(v));
             }
+        }
+        if self.cfg.restart.is_some() {
+            // The walk's cost counts the abandoned attempts ([`restart`] module docs).
+            let (steps, wall) = self.attempt.spent();
+            for (name, add) in [("steps_to_walk", steps as f64), ("time_to_walk_s", wall)] {
+                if let Some(v) = learner.get_mut(name) {
+                    *v = Value::from(v.as_f64().unwrap_or(f64::NAN) + add);
+                }
+            }
+            learner.insert("attempt_seed".into(), Value::from(self.attempt.seed));
+            learner.insert("restarts".into(), Value::from(self.attempt.earlier.len()));
+            learner.insert("restart_env_steps".into(), Value::from(steps));
+            learner.insert("restart_wall_s".into(), Value::from(wall));
         }
         let summary = Summary {
             agent: self.cfg.agent.name().into(),

@@ -1,0 +1,174 @@
+//! Contract of `[restart]`: a run whose checks never went `min_distance` by `at_steps` env
+//! steps starts over as seed + 1000, keeping the abandoned attempt's files under
+//! `RUN/restarts/seed-S/`; the new attempt is exactly the run of seed + 1000 (same rows, same
+//! weights); a run stopped after its restart resumes the new attempt exactly; the summary
+//! names the attempt's seed and counts what the abandoned attempt cost.
+
+mod common;
+
+use common::{ok_output, read_json, rows, smoke, tensors};
+use std::path::Path;
+
+/// Checks every 100 env steps from 2 starts of the smoke preset's 1 s episodes: no check goes
+/// 5 m, so with `restart` the run starts over once it has taken 150 steps.
+fn config(dir: &Path, restart: bool) -> String {
+    let p = dir.join(if restart {
+        "restart.toml"
+    } else {
+        "plain.toml"
+    });
+    let mut text = "check = { starts = 2, every_steps = 100 }\n".to_string();
+    if restart {
+        text += "restart = { at_steps = 150, min_distance = 5.0, max = 1 }\n";
+    }
+    std::fs::write(&p, text).unwrap();
+    p.to_str().unwrap().to_string()
+}
+
+fn train(dir: &Path, seed: &str, generations: &str, config: &str) -> String {
+    smoke(
+        "es-sac",
+        dir,
+        &[
+            "--seed",
+            seed,
+            "--generations",
+            generations,
+            "--threads",
+            "1",
+            "--config",
+            config,
+        ],
+    )
+}
+
+#[test]
+fn a_run_that_has_not_got_going_starts_over_as_the_run_of_seed_plus_1000() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (with_restart, plain) = (config(tmp.path(), true), config(tmp.path(), false));
+    let run = tmp.path().join("run");
+    let stderr = train(&run, "3", "8", &with_restart);
+    assert!(
+        stderr.contains("starting over as seed 1003"),
+        "the restart is announced: {stderr}"
+    );
+
+    let restarts = read_json(&run.join("restarts.json"));
+    let restarts = restarts.as_array().unwrap();
+    assert_eq!(restarts.len(), 1, "max = 1");
+    let first = &restarts[0];
+    assert_eq!(first["seed"], 3);
+    assert_eq!(first["settled"], true);
+    assert!(first["env_steps"].as_u64().unwrap() >= 150);
+    assert!(first["best_distance"].as_f64().unwrap() < 5.0);
+    let old = run.join("restarts/seed-3");
+    let old_rows = rows(&old);
+    assert_eq!(old_rows.len(), first["rows"].as_u64().unwrap() as usize);
+    let last_steps = old_rows.last().unwrap()["env_steps"].as_u64().unwrap();
+    let before_last = old_rows[old_rows.len() - 2]["env_steps"].as_u64().unwrap();
+    assert!(
+        before_last < 150 && last_steps >= 150,
+        "abandoned at the first row past at_steps: {before_last}, {last_steps}"
+    );
+    for f in [
+        "config.toml",
+        "checks.jsonl",
+        "summary.json",
+        "best/best.json",
+    ] {
+        assert!(old.join(f).exists(), "restarts/seed-3/{f}");
+    }
+    assert!(!old.join("checkpoint").exists() && !old.join("replay").exists());
+
+    // The attempt that followed is the plain run of seed 1003, row for row and weight for
+    // weight (the run's budget is each attempt's).
+    let reference = tmp.path().join("seed-1003");
+    train(&reference, "1003", "8", &plain);
+    assert_eq!(rows(&run).len(), 8);
+    assert_eq!(rows(&run), rows(&reference));
+    for file in ["actor.safetensors", "agent.safetensors"] {
+        assert_eq!(
+            tensors(&run.join("checkpoint").join(file)),
+            tensors(&reference.join("checkpoint").join(file)),
+            "{file}"
+        );
+    }
+    assert_eq!(
+        std::fs::read_to_string(run.join("checks.jsonl"))
+            .unwrap()
+            .lines()
+            .count(),
+        std::fs::read_to_string(reference.join("checks.jsonl"))
+            .unwrap()
+            .lines()
+            .count()
+    );
+    // config.toml keeps the seed the run was given; the summary names the attempt's.
+    let cfg = std::fs::read_to_string(run.join("config.toml")).unwrap();
+    assert!(cfg.contains("seed = 3"), "{cfg}");
+    let summary = read_json(&run.join("summary.json"));
+    assert_eq!(summary["seed"], 3);
+    assert_eq!(summary["attempt_seed"], 1003);
+    assert_eq!(summary["restarts"], 1);
+    assert_eq!(summary["restart_env_steps"], first["env_steps"]);
+
+    // Stopped after the restart and resumed: the same rows and weights.
+    let split = tmp.path().join("split");
+    train(
+        &split,
+        "3",
+        &(old_rows.len() + 2).to_string(),
+        &with_restart,
+    );
+    assert!(
+        split.join("restarts/seed-3").is_dir(),
+        "restarted before the stop"
+    );
+    let p = split.to_str().unwrap();
+    ok_output(&[
+        "train",
+        "es-sac",
+        "--resume",
+        p,
+        "--generations",
+        "8",
+        "--no-progress",
+    ]);
+    assert_eq!(rows(&split), rows(&run));
+    for file in ["actor.safetensors", "agent.safetensors"] {
+        assert_eq!(
+            tensors(&split.join("checkpoint").join(file)),
+            tensors(&run.join("checkpoint").join(file)),
+            "resumed {file}"
+        );
+    }
+    assert_eq!(
+        read_json(&split.join("restarts.json"))
+            .as_array()
+            .unwrap()
+            .len(),
+        1,
+        "the resumed attempt is not restarted again"
+    );
+}
+
+#[test]
+fn restart_without_the_walking_check_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path().join("bad.toml");
+    std::fs::write(&p, "restart = { at_steps = 150 }\n").unwrap();
+    let stderr = common::fails(&[
+        "train",
+        "es-sac",
+        "--preset",
+        "smoke",
+        "--config",
+        p.to_str().unwrap(),
+        "--out",
+        tmp.path().join("run").to_str().unwrap(),
+    ]);
+    assert!(
+        stderr.contains("[restart] needs the walking check"),
+        "{stderr}"
+    );
+}
