@@ -172,3 +172,56 @@ fn restart_without_the_walking_check_is_refused() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_study_records_the_abandoned_attempts_and_reports_the_kept_seed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = tmp.path().join("restart.toml");
+    std::fs::write(
+        &study,
+        r#"
+description = "restart smoke study"
+seeds = [3]
+[eval]
+episodes = 2
+[[arm]]
+name = "restart"
+agent = "es-sac"
+preset = "smoke"
+generations = 6
+set = { check = { starts = 2, every_steps = 100 }, restart = { at_steps = 150, min_distance = 5.0, max = 1 } }
+"#,
+    )
+    .unwrap();
+    let dir = tmp.path().join("study");
+    let d = dir.to_str().unwrap();
+    common::ok(&[
+        "study",
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        d,
+        "--jobs",
+        "1",
+        "--threads",
+        "1",
+        "--no-progress",
+    ]);
+    let record = dir.join("records/restart-s3");
+    let restarts = read_json(&record.join("restarts.json"));
+    assert_eq!(restarts[0]["seed"], 3);
+    for f in ["metrics.csv", "summary.json", "checks.jsonl"] {
+        assert!(record.join("restarts/seed-3").join(f).is_file(), "{f}");
+    }
+    common::ok(&["study", "report", d]);
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(
+        report.contains("restart-s3 (restarted as seed 1003)"),
+        "{report}"
+    );
+    // The run's cost counts the abandoned attempt.
+    let csv = std::fs::read_to_string(dir.join("report.csv")).unwrap();
+    let summary = read_json(&record.join("summary.json"));
+    let total = summary["env_steps"].as_u64().unwrap() + restarts[0]["env_steps"].as_u64().unwrap();
+    assert!(csv.contains(&format!(",{total},")), "{csv}");
+}

@@ -64,6 +64,8 @@ struct RunRow {
     env_steps: u64,
     wall_s: f64,
     best_win_50: f64,
+    /// The seed of the attempt that was kept, when `[restart]` started the run over.
+    restarted_as: Option<u64>,
 }
 
 /// Largest 95th-percentile knee angle of the two knees, degrees: how far the swing knee
@@ -86,6 +88,10 @@ fn run_row(study: &Study, rec: &Record) -> RunRow {
         .filter_map(|e| e.gait.as_ref()?.track_time)
         .collect();
     let figure = |k: &str| rec.summary.learner.get(k).and_then(Value::as_f64);
+    // A run that started over counts its abandoned attempts in its cost.
+    let restarted = figure("restarts").is_some_and(|n| n > 0.0);
+    let restart_steps = figure("restart_env_steps").unwrap_or(0.0) as u64;
+    let restart_wall = figure("restart_wall_s").unwrap_or(0.0);
     RunRow {
         arm: study.file.arms[rec.arm].name.clone(),
         seed: rec.seed,
@@ -106,9 +112,12 @@ fn run_row(study: &Study, rec: &Record) -> RunRow {
         checked: figure("checks").is_some_and(|c| c > 0.0),
         steps_to_walk: figure("steps_to_walk"),
         time_to_walk_s: figure("time_to_walk_s"),
-        env_steps: rec.summary.env_steps,
-        wall_s: rec.summary.wall_s,
+        env_steps: rec.summary.env_steps + restart_steps,
+        wall_s: rec.summary.wall_s + restart_wall,
         best_win_50: rec.summary.curve.best_win_50,
+        restarted_as: restarted
+            .then(|| rec.summary.learner.get("attempt_seed")?.as_u64())
+            .flatten(),
     }
 }
 
@@ -334,9 +343,11 @@ fn every_run(rows: &[RunRow]) -> (String, String) {
     );
     for r in rows {
         md.push_str(&format!(
-            "| {}-s{} | {} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.0} |\n",
+            "| {}-s{}{} | {} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.0} |\n",
             r.arm,
             r.seed,
+            r.restarted_as
+                .map_or(String::new(), |s| format!(" (restarted as seed {s})")),
             if r.at_bar { "yes" } else { "no" },
             r.classes,
             r.finished,
@@ -423,6 +434,19 @@ fn table1_section(study: &Study, records: &[Record]) -> Result<String> {
          steps to the first policy the walking check found at the bar during training \
          (`checks.jsonl`); wall: training time as measured on the machine that ran it.\n",
     );
+    let restarted = |r: &&Record| {
+        r.summary
+            .learner
+            .get("restarts")
+            .and_then(Value::as_f64)
+            .is_some_and(|n| n > 0.0)
+    };
+    if records.iter().any(|r| restarted(&r)) {
+        md.push_str(
+            "A run that `[restart]` started over names the seed of the attempt it kept; its \
+             steps to walk, env steps and wall count the attempts it abandoned.\n",
+        );
+    }
     Ok(md)
 }
 

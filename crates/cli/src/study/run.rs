@@ -198,6 +198,27 @@ fn write_record(run: &Path, record: &Path, eval: &StudyEval) -> Result<()> {
                 .with_context(|| format!("copying {}", from.display()))?;
         }
     }
+    // A run that started over: its abandoned attempts' records beside its own.
+    for abandoned in esrl_run::restart::read(run)? {
+        let dest = tmp.join(&abandoned.folder);
+        fs::create_dir_all(&dest).with_context(|| format!("creating {}", dest.display()))?;
+        for name in [
+            RunDir::CSV,
+            RunDir::SUMMARY,
+            esrl_run::training::CHECKS_FILE,
+        ] {
+            let from = run.join(&abandoned.folder).join(name);
+            if from.is_file() {
+                fs::copy(&from, dest.join(name))
+                    .with_context(|| format!("copying {}", from.display()))?;
+            }
+        }
+    }
+    let restarts = run.join(esrl_run::restart::RESTARTS_FILE);
+    if restarts.is_file() {
+        fs::copy(&restarts, tmp.join(esrl_run::restart::RESTARTS_FILE))
+            .with_context(|| format!("copying {}", restarts.display()))?;
+    }
     for name in ["actor.safetensors", RunDir::CONFIG, BEST_INFO] {
         let from = loaded.checkpoint.join(name);
         if from.is_file() {
