@@ -65,6 +65,7 @@ struct RunRow {
     wall_s: f64,
     best_win_50: f64,
     /// The seed of the attempt that was kept, when `[restart]` started the run over.
+    #[serde(skip_serializing_if = "Option::is_none")]
     restarted_as: Option<u64>,
 }
 
