@@ -303,17 +303,23 @@ impl PyDriver {
     }
 
     /// Runs one row (a generation, or an episode of a plain agent) with the interpreter
-    /// released and writes it; returns `{"rows", "curve", "best", "summary", "estimate"}`,
-    /// `estimate` the line on the time left (`esrl train`'s) on the row that first gives a
-    /// pace, else `None`.
+    /// released and writes it; returns `{"rows", "curve", "best", "summary", "estimate",
+    /// "restart"}`, `estimate` the line on the time left (`esrl train`'s) on the row that
+    /// first gives a pace, else `None`; `restart` the line on an attempt `[restart]`
+    /// abandoned before the row, else `None`.
     fn step<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (row, unit) = py
-            .detach(
-                || -> PyResult<esrl_run::Result<(esrl_run::RowDone, &str)>> {
-                    let mut session = self.session()?;
-                    Ok(session.step().map(|row| (row, session.unit())))
-                },
-            )?
+        type Stepped = (esrl_run::RowDone, &'static str, Option<String>);
+        let (row, unit, restart) = py
+            .detach(|| -> PyResult<esrl_run::Result<Stepped>> {
+                let mut session = self.session()?;
+                Ok(session.step().map(|row| {
+                    let restart = row.restarted.as_ref().and_then(|r| {
+                        let rule = session.config().restart.as_ref()?;
+                        Some(r.describe(rule, session.attempt().seed))
+                    });
+                    (row, session.unit(), restart)
+                }))
+            })?
             .map_err(run_error)?;
         let d = PyDict::new(py);
         d.set_item("rows", row.rows)?;
@@ -321,6 +327,7 @@ impl PyDriver {
         d.set_item("best", row.best)?;
         d.set_item("summary", row.summary)?;
         d.set_item("estimate", row.estimate.map(|e| e.describe(unit)))?;
+        d.set_item("restart", restart)?;
         Ok(d)
     }
 

@@ -250,8 +250,8 @@ fn closing(cfg: &TrainConfig, root: &Path, training: &Session) -> String {
         let (steps, wall) = attempt.spent();
         out += &format!(
             "  restarts: {} attempt(s) abandoned ({steps} env steps, {} of training, in \
-             {dir}/restarts/); the run below is seed {}'s, and the times to walk count the \
-             abandoned attempts\n",
+             {dir}/restarts/); below is the attempt of seed {}, with its own steps and \
+             times (summary.json's steps_to_walk and time_to_walk_s add the abandoned ones)\n",
             attempt.earlier.len(),
             human_duration(wall),
             attempt.seed

@@ -140,6 +140,11 @@ impl Session {
         Ok(Some(record))
     }
 
+    /// The run's configuration.
+    pub fn config(&self) -> &TrainConfig {
+        &self.cfg
+    }
+
     /// Which attempt of the run trains now (`[restart]`).
     pub fn attempt(&self) -> &Attempt {
         each!(&self.training, t => t.attempt())

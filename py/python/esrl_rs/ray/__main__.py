@@ -297,6 +297,8 @@ def train(argv: List[str]) -> int:
     rows0, t0, last = driver.rows, time.perf_counter(), 0.0
     while not stop.requested and not driver.done():
         row = _off_main_thread(driver.step)
+        if row["restart"]:
+            print(row["restart"], file=sys.stderr, flush=True)
         if row["estimate"]:
             print(row["estimate"], file=sys.stderr, flush=True)
         now = time.perf_counter() - t0
