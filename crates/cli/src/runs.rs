@@ -61,7 +61,9 @@ pub fn run_state(dir: &Path) -> Result<RunState> {
     if Summary::read(dir)?.is_some_and(|s| s.finished) {
         return Ok(RunState::Finished);
     }
-    if checkpoint::find(dir).is_some() {
+    // A run that started over (`[restart]`) resumes its current attempt, from its
+    // checkpoint or, killed before the attempt's first one, from the attempt's start.
+    if checkpoint::find(dir).is_some() || dir.join(esrl_run::restart::RESTARTS_FILE).exists() {
         return Ok(RunState::Resumable);
     }
     if dir.join(RunDir::JSONL).exists() {

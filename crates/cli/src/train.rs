@@ -142,7 +142,7 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
     let bar = progress_bar(total, training.rows(), display);
     let log = display.verbose() && bar.is_hidden();
     let mut last_log = Instant::now();
-    let rows_at_start = training.rows();
+    let mut rows_at_start = training.rows();
     let mut finished = false;
     loop {
         if training.done() {
@@ -160,6 +160,8 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
             }
         };
         if let (Some(restart), Some(rule)) = (&row.restarted, &cfg.restart) {
+            // The new attempt counts its rows from the start.
+            rows_at_start = 0;
             let text = restart.describe(rule, training.attempt().seed);
             if bar.is_hidden() {
                 eprintln!("{text}");

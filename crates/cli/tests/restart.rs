@@ -150,6 +150,41 @@ fn a_run_that_has_not_got_going_starts_over_as_the_run_of_seed_plus_1000() {
         1,
         "the resumed attempt is not restarted again"
     );
+
+    // Killed after the restart, before the new attempt's first checkpoint: resumed, the
+    // attempt starts over from its seed and ends as the uninterrupted run did.
+    let killed = tmp.path().join("killed");
+    train(
+        &killed,
+        "3",
+        &(old_rows.len() + 2).to_string(),
+        &with_restart,
+    );
+    for gone in ["checkpoint", "checkpoint.old", "replay"] {
+        let p = killed.join(gone);
+        if p.exists() {
+            std::fs::remove_dir_all(p).unwrap();
+        }
+    }
+    let again = common::esrl(&["train", "es-sac", "--out", killed.to_str().unwrap()]);
+    assert!(
+        !again.status.success(),
+        "a new run is not trained into a folder that started over"
+    );
+    ok_output(&[
+        "train",
+        "es-sac",
+        "--resume",
+        killed.to_str().unwrap(),
+        "--generations",
+        "8",
+        "--no-progress",
+    ]);
+    assert_eq!(rows(&killed), rows(&run));
+    assert_eq!(
+        tensors(&killed.join("checkpoint/actor.safetensors")),
+        tensors(&run.join("checkpoint/actor.safetensors"))
+    );
 }
 
 #[test]

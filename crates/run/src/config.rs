@@ -547,6 +547,7 @@ impl TrainConfig {
         }
         if let Some(restart) = &self.restart {
             restart.validate()?;
+            crate::restart::attempt_seed(self.seed, restart.max)?;
             if self.check.is_none() || self.env != EnvKind::Walk {
                 bail!(
                     "[restart] needs the walking check: a `[check]` table on the walking task \

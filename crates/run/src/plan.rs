@@ -7,6 +7,7 @@ use crate::bail;
 use crate::checkpoint;
 use crate::config::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
 use crate::error::Result;
+use crate::restart;
 use crate::run_dir::{write_atomic, RunDir};
 use std::path::PathBuf;
 
@@ -61,8 +62,10 @@ pub fn plan(req: &TrainRequest) -> Result<TrainPlan> {
     let Some(dir) = &req.resume else {
         let cfg = TrainConfig::resolve(req.agent, &req.overrides, req.seed)?;
         let root = req.out.clone().unwrap_or_else(|| default_out(&cfg));
-        if root.join(RunDir::JSONL).exists() {
-            let how = if checkpoint::find(&root).is_some() {
+        if root.join(RunDir::JSONL).exists() || root.join(restart::RESTARTS_FILE).exists() {
+            let how = if checkpoint::find(&root).is_some()
+                || root.join(restart::RESTARTS_FILE).exists()
+            {
                 "continues it from its last checkpoint"
             } else {
                 "starts it over (it stopped before its first checkpoint)"

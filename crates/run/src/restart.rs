@@ -169,18 +169,16 @@ impl Restart {
     }
 }
 
-/// The abandoned attempts of the run in `root`, the last one's files moved if a kill
-/// interrupted its restart ([`settle`]). None for a run that never restarted.
+/// The abandoned attempts of the run in `root` (`RUN/restarts.json`), as written: the last
+/// one not yet `settled` if a kill interrupted its restart (the training that takes the
+/// folder's lock finishes it, [`settle`]). None for a run that never restarted.
 pub fn read(root: &Path) -> Result<Vec<Restart>> {
     let p = root.join(RESTARTS_FILE);
     if !p.exists() {
         return Ok(Vec::new());
     }
     let text = fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
-    let mut restarts: Vec<Restart> =
-        serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
-    settle(root, &mut restarts)?;
-    Ok(restarts)
+    serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))
 }
 
 /// Abandons the attempt whose record is `restart`: records it in `restarts.json`, then moves
@@ -351,8 +349,10 @@ mod tests {
         };
         // The record written, the kill before any file moved.
         write_json_atomic(&root.join(RESTARTS_FILE), &vec![record]).unwrap();
-        let restarts = read(root).unwrap();
-        assert!(restarts[0].settled);
+        let mut restarts = read(root).unwrap();
+        assert!(!restarts[0].settled);
+        settle(root, &mut restarts).unwrap();
+        assert!(restarts[0].settled && read(root).unwrap()[0].settled);
         assert_eq!(
             fs::read_to_string(root.join("restarts/seed-7/metrics.jsonl")).unwrap(),
             "old attempt"

@@ -147,7 +147,7 @@ impl RunDir {
     /// Creates a fresh run folder. Refuses a folder that already holds metrics, so nothing
     /// already written is lost; use [`RunDir::resume`] to continue one.
     pub fn create(root: &Path, config_toml: &str) -> Result<Self> {
-        if root.join(Self::JSONL).exists() {
+        if root.join(Self::JSONL).exists() || root.join(crate::restart::RESTARTS_FILE).exists() {
             let how = if root.join(Self::CHECKPOINT).exists() {
                 "continues it from its last checkpoint"
             } else {

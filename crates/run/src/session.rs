@@ -136,7 +136,9 @@ impl Session {
                 ))
             }
         }
+        // The next rows give the new attempt's pace.
         self.start = (0, 0, Instant::now());
+        self.estimated = false;
         Ok(Some(record))
     }
 

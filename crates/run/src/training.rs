@@ -201,10 +201,25 @@ impl<L: Learner> Training<L> {
         mut learner: L,
         envs: Arc<MakeEnv>,
         resume: bool,
-        attempt: Attempt,
+        mut attempt: Attempt,
     ) -> Result<(Self, Opening)> {
         let pool = crate::build::pool(cfg.threads)?;
         let lock = lock_run(root)?;
+        if resume {
+            // A restart killed before its files were moved is finished now, under the lock.
+            let written = restart::read(root)?;
+            if written.len() != attempt.earlier.len() {
+                crate::bail!(
+                    "{} started over {} time(s) ({}); this training was built for attempt {}. \
+                     Resume it with `esrl train --resume`, which builds the attempt's learner",
+                    root.display(),
+                    written.len(),
+                    restart::RESTARTS_FILE,
+                    attempt.earlier.len()
+                );
+            }
+            restart::settle(root, &mut attempt.earlier)?;
+        }
         let mut state = RunState::fresh();
         let (run, opening) = match (resume, checkpoint::find(root)) {
             (true, Some(dir)) => {

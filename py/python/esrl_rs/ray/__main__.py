@@ -294,9 +294,11 @@ def train(argv: List[str]) -> int:
           f"stops after the current {unit} with a checkpoint", file=sys.stderr, flush=True)
 
     stop = _StopSignals(unit)
-    rows0, t0, last = driver.rows, time.perf_counter(), 0.0
+    # Rows run in this session (a restart starts the run's row count over).
+    rows, t0, last = 0, time.perf_counter(), 0.0
     while not stop.requested and not driver.done():
         row = _off_main_thread(driver.step)
+        rows += 1
         if row["restart"]:
             print(row["restart"], file=sys.stderr, flush=True)
         if row["estimate"]:
@@ -308,7 +310,6 @@ def train(argv: List[str]) -> int:
                   f"{row['best']:.1f} | {_human(driver.wall_s)}", file=sys.stderr, flush=True)
     finished = driver.done()
     driver.finish(finished)
-    rows = driver.rows - rows0
     traffic = driver.traffic
     if plan.hybrid and rows > 0:
         print(f"ray: {rows} {unit}s in {_human(time.perf_counter() - t0)}; per {unit}: "
