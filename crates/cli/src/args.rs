@@ -36,11 +36,12 @@ pub enum Command {
 /// Options shared by commands that train.
 #[derive(Debug, Clone, Args)]
 pub struct TrainOptions {
-    /// Named settings; a --config file and the flags below override them. `walking-torque`
-    /// (the default) is the recipe that walks on torque actions and stops at the first walk;
-    /// `walking` the same recipe on joint-angle targets; `paper` the paper's literal §5
-    /// protocol.
-    #[arg(long, value_enum, default_value_t = Preset::WalkingTorque)]
+    /// Named settings; a --config file and the flags below override them. `walker` (the
+    /// default) is the recipe that walks on torque actions, stops at the first walk that
+    /// finishes every check start and starts over from another seed when a run has not got
+    /// going; `walking-torque` the same without the stricter stop and the restart; `walking`
+    /// the recipe on joint-angle targets; `paper` the paper's literal §5 protocol.
+    #[arg(long, value_enum, default_value_t = Preset::Walker)]
     pub preset: Preset,
     /// TOML file overriding the preset (same keys as a run folder's config.toml).
     #[arg(long, value_name = "FILE.toml")]
@@ -65,7 +66,7 @@ pub struct TrainOptions {
     pub steps: Option<u64>,
     /// `walk`: stop as soon as a walking check meets the bar (the policy is kept in
     /// RUN/best/); `budget`: run the whole budget. [default: the preset's: `walk` for
-    /// `walking-torque`, else `budget`]
+    /// `walker` and `walking-torque`, else `budget`]
     #[arg(long, value_enum)]
     pub until: Option<Until>,
     /// Hide the progress bar (it is also hidden when stderr is not a terminal).

@@ -1,18 +1,26 @@
 //! Contract: the times the start banner states come from one place
 //! (`TrainConfig::typical_time`), and the README's quick start states the same ones.
 
-use esrl_run::config::{TIME_PENDULUM, TIME_QUICK, TIME_WALKING, TIME_WALKING_TORQUE};
+use esrl_run::config::{TIME_PENDULUM, TIME_QUICK, TIME_WALKER, TIME_WALKING, TIME_WALKING_TORQUE};
 use esrl_run::{AgentKind, EnvKind, Preset, TrainConfig};
 
 #[test]
 fn the_readme_states_the_banner_times() {
     let readme =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
-    for t in [TIME_WALKING_TORQUE, TIME_WALKING, TIME_QUICK, TIME_PENDULUM] {
+    for t in [
+        TIME_WALKER,
+        TIME_WALKING_TORQUE,
+        TIME_WALKING,
+        TIME_QUICK,
+        TIME_PENDULUM,
+    ] {
         assert!(readme.contains(t), "the README lacks {t:?}");
     }
     let default = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::default());
-    assert_eq!(default.typical_time(), Some(TIME_WALKING_TORQUE));
+    assert_eq!(default.typical_time(), Some(TIME_WALKER));
+    let torque = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::WalkingTorque);
+    assert_eq!(torque.typical_time(), Some(TIME_WALKING_TORQUE));
     let walking = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::Walking);
     assert_eq!(walking.typical_time(), Some(TIME_WALKING));
     let pendulum = TrainConfig::preset(AgentKind::Sac, EnvKind::Pendulum, Preset::default());

@@ -75,17 +75,17 @@ fn plain_agents_learn_at_the_same_ratio_within_the_same_steps() {
     assert!(!quick.rl.clip_targets);
 }
 
-/// The default preset is `walking` on torque actions that stops at the first walk, with the
+/// `walking-torque` is `walking` on torque actions that stops at the first walk, with the
 /// generation cap lifted: those keys and nothing else, for every agent on the walking env,
 /// and the pendulum's settings are `walking`'s.
 #[test]
-fn the_default_is_walking_on_torques_until_the_first_walk() {
-    assert_eq!(Preset::default(), Preset::WalkingTorque);
+fn walking_torque_is_walking_on_torques_until_the_first_walk() {
     for agent in AgentKind::ALL {
         let walking =
             TrainConfig::resolve(agent, &options(Preset::Walking, None, None), Some(0)).unwrap();
-        let torque = TrainConfig::resolve(agent, &Overrides::default(), Some(0)).unwrap();
-        assert_eq!(torque.preset, Preset::WalkingTorque);
+        let torque =
+            TrainConfig::resolve(agent, &options(Preset::WalkingTorque, None, None), Some(0))
+                .unwrap();
         let differ = esrl_run::config::config_differences(&walking, &torque).unwrap();
         assert_eq!(
             differ,
@@ -97,6 +97,33 @@ fn the_default_is_walking_on_torques_until_the_first_walk() {
             ],
             "{agent:?}"
         );
+    }
+}
+
+/// The default preset is `walking-torque` with the stricter stop (all 10 check starts at
+/// the line, then 19 of 20) and `[restart]` at its defaults: those keys and nothing else on
+/// the walking env; on the pendulum (no check, so no restart) every preset of the recipe
+/// resolves alike.
+#[test]
+fn the_default_is_walking_torque_with_a_stricter_stop_and_restarts() {
+    assert_eq!(Preset::default(), Preset::Walker);
+    for agent in AgentKind::ALL {
+        let torque =
+            TrainConfig::resolve(agent, &options(Preset::WalkingTorque, None, None), Some(0))
+                .unwrap();
+        let walker = TrainConfig::resolve(agent, &Overrides::default(), Some(0)).unwrap();
+        assert_eq!(walker.preset, Preset::Walker);
+        let differ = esrl_run::config::config_differences(&torque, &walker).unwrap();
+        assert_eq!(
+            differ,
+            [
+                "check.confirm_starts: 0 vs 10",
+                "check.finish_share: 0.8 vs 0.95",
+                "preset: \"walking-torque\" vs \"walker\"",
+                "restart: none vs { at_steps = 1000000, max = 2, min_distance = 15.0 }",
+            ],
+            "{agent:?}"
+        );
         let on = |preset| {
             let o = Overrides {
                 preset,
@@ -105,6 +132,7 @@ fn the_default_is_walking_on_torques_until_the_first_walk() {
             };
             without_preset_name(&TrainConfig::resolve(agent, &o, Some(0)).unwrap())
         };
+        assert_eq!(on(Preset::Walker), on(Preset::Walking), "{agent:?}");
         assert_eq!(on(Preset::WalkingTorque), on(Preset::Walking), "{agent:?}");
     }
 }

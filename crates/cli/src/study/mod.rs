@@ -13,7 +13,7 @@
 //!
 //! [[arm]]
 //! name = "default"
-//! agent = "es-sac"                # preset "walking-torque" unless `preset` says otherwise
+//! agent = "es-sac"                # preset "walker" unless `preset` says otherwise
 //!
 //! [[arm]]
 //! name = "mirror"
@@ -140,7 +140,7 @@ pub struct Arm {
     pub name: String,
     /// The agent.
     pub agent: AgentKind,
-    /// The preset underneath (default `walking-torque`).
+    /// The preset underneath (default `walker`).
     #[serde(default)]
     pub preset: Option<Preset>,
     /// A TOML file laid over the preset, relative to the study file.
