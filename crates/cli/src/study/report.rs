@@ -90,7 +90,6 @@ fn run_row(study: &Study, rec: &Record) -> RunRow {
         .collect();
     let figure = |k: &str| rec.summary.learner.get(k).and_then(Value::as_f64);
     // A run that started over counts its abandoned attempts in its cost.
-    let restarted = figure("restarts").is_some_and(|n| n > 0.0);
     let restart_steps = figure("restart_env_steps").unwrap_or(0.0) as u64;
     let restart_wall = figure("restart_wall_s").unwrap_or(0.0);
     RunRow {
@@ -116,10 +115,15 @@ fn run_row(study: &Study, rec: &Record) -> RunRow {
         env_steps: rec.summary.env_steps + restart_steps,
         wall_s: rec.summary.wall_s + restart_wall,
         best_win_50: rec.summary.curve.best_win_50,
-        restarted_as: restarted
-            .then(|| rec.summary.learner.get("attempt_seed")?.as_u64())
-            .flatten(),
+        restarted_as: restarted_as(&rec.summary),
     }
+}
+
+/// The seed of the attempt a run kept, when `[restart]` started it over.
+fn restarted_as(summary: &Summary) -> Option<u64> {
+    let figure = |k: &str| summary.learner.get(k).and_then(Value::as_u64);
+    figure("restarts").filter(|&n| n > 0)?;
+    figure("attempt_seed")
 }
 
 fn fmt(v: Option<f64>, digits: usize) -> String {
@@ -435,14 +439,7 @@ fn table1_section(study: &Study, records: &[Record]) -> Result<String> {
          steps to the first policy the walking check found at the bar during training \
          (`checks.jsonl`); wall: training time as measured on the machine that ran it.\n",
     );
-    let restarted = |r: &&Record| {
-        r.summary
-            .learner
-            .get("restarts")
-            .and_then(Value::as_f64)
-            .is_some_and(|n| n > 0.0)
-    };
-    if records.iter().any(|r| restarted(&r)) {
+    if records.iter().any(|r| restarted_as(&r.summary).is_some()) {
         md.push_str(
             "A run that `[restart]` started over names the seed of the attempt it kept; its \
              steps to walk, env steps and wall count the attempts it abandoned.\n",

@@ -186,38 +186,22 @@ fn write_record(run: &Path, record: &Path, eval: &StudyEval) -> Result<()> {
     }
     let policy = tmp.join("policy");
     fs::create_dir_all(&policy).with_context(|| format!("creating {}", policy.display()))?;
-    for name in [
-        RunDir::CONFIG,
+    let logs = [
         RunDir::CSV,
         RunDir::SUMMARY,
         esrl_run::training::CHECKS_FILE,
-    ] {
-        let from = run.join(name);
-        if from.is_file() {
-            fs::copy(&from, tmp.join(name))
-                .with_context(|| format!("copying {}", from.display()))?;
-        }
-    }
+    ];
+    copy_present(
+        run,
+        &tmp,
+        &[RunDir::CONFIG, esrl_run::restart::RESTARTS_FILE],
+    )?;
+    copy_present(run, &tmp, &logs)?;
     // A run that started over: its abandoned attempts' records beside its own.
     for abandoned in esrl_run::restart::read(run)? {
         let dest = tmp.join(&abandoned.folder);
         fs::create_dir_all(&dest).with_context(|| format!("creating {}", dest.display()))?;
-        for name in [
-            RunDir::CSV,
-            RunDir::SUMMARY,
-            esrl_run::training::CHECKS_FILE,
-        ] {
-            let from = run.join(&abandoned.folder).join(name);
-            if from.is_file() {
-                fs::copy(&from, dest.join(name))
-                    .with_context(|| format!("copying {}", from.display()))?;
-            }
-        }
-    }
-    let restarts = run.join(esrl_run::restart::RESTARTS_FILE);
-    if restarts.is_file() {
-        fs::copy(&restarts, tmp.join(esrl_run::restart::RESTARTS_FILE))
-            .with_context(|| format!("copying {}", restarts.display()))?;
+        copy_present(&run.join(&abandoned.folder), &dest, &logs)?;
     }
     for name in ["actor.safetensors", RunDir::CONFIG, BEST_INFO] {
         let from = loaded.checkpoint.join(name);
@@ -243,6 +227,18 @@ fn write_record(run: &Path, record: &Path, eval: &StudyEval) -> Result<()> {
     }
     fs::rename(&tmp, record)
         .with_context(|| format!("renaming {} into place", record.display()))?;
+    Ok(())
+}
+
+/// Copies each of the files `names` that `from` holds into `to`.
+fn copy_present(from: &Path, to: &Path, names: &[&str]) -> Result<()> {
+    for name in names {
+        let file = from.join(name);
+        if file.is_file() {
+            fs::copy(&file, to.join(name))
+                .with_context(|| format!("copying {}", file.display()))?;
+        }
+    }
     Ok(())
 }
 
