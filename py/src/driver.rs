@@ -107,7 +107,7 @@ fn parse_name<T>(
 #[pyfunction]
 #[pyo3(signature = (agent, *, seed=None, out=None, resume=None, preset=None, config=None,
     env=None, urdf=None, threads=None, generations=None, episodes=None, steps=None,
-    until=None))]
+    until=None, init=None))]
 #[allow(clippy::too_many_arguments)]
 fn plan_train(
     py: Python<'_>,
@@ -124,6 +124,7 @@ fn plan_train(
     episodes: Option<usize>,
     steps: Option<u64>,
     until: Option<&str>,
+    init: Option<PathBuf>,
 ) -> PyResult<PyTrainPlan> {
     let agents: Vec<&str> = AgentKind::ALL.iter().map(|a| a.name()).collect();
     let presets: Vec<&str> = Preset::ALL.iter().map(|p| p.name()).collect();
@@ -161,6 +162,7 @@ fn plan_train(
             episodes,
             steps,
             stop_at_walk,
+            init,
         },
     };
     let plan = py.detach(|| esrl_run::plan(&request)).map_err(run_error)?;

@@ -96,6 +96,7 @@ impl TrainOptions {
             episodes: self.episodes,
             steps: self.steps,
             stop_at_walk: self.until.map(|u| u == Until::Walk),
+            init: None,
         }
     }
 }
@@ -110,7 +111,7 @@ pub struct TrainArgs {
     #[arg(long)]
     pub seed: Option<u64>,
     /// Run folder [default: `runs/<agent>-s<seed>`; `runs/<agent>-pendulum-s<seed>` on
-    /// the pendulum].
+    /// the pendulum, `runs/<agent>-init-s<seed>` with --init].
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
     /// Continue the run in DIR from its last checkpoint (its config.toml is used; --seed,
@@ -119,9 +120,15 @@ pub struct TrainArgs {
     #[arg(
         long,
         value_name = "DIR",
-        conflicts_with_all = ["out", "config", "preset", "seed", "env", "urdf"]
+        conflicts_with_all = ["out", "config", "preset", "seed", "env", "urdf", "init"]
     )]
     pub resume: Option<PathBuf>,
+    /// Start from the weights of a trained policy (fine-tuning): a run folder (its kept
+    /// policy), a checkpoint or best/ folder, or a study record's policy/. The critics come
+    /// too when the folder has them; the policy must be for the same task and networks
+    /// (`init` in config.toml; RUN/init.json records what was loaded).
+    #[arg(long, value_name = "DIR")]
+    pub init: Option<PathBuf>,
     /// Shared training options.
     #[command(flatten)]
     pub opts: TrainOptions,

@@ -6,7 +6,7 @@ use crate::args::{EnvKind, TrainArgs};
 use crate::signals;
 use anyhow::Result;
 use esrl_run::human_duration;
-use esrl_run::{build, Opening, Session, TrainConfig, TrainRequest};
+use esrl_run::{build, Opening, Overrides, Session, TrainConfig, TrainRequest};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -44,7 +44,10 @@ pub fn run(args: &TrainArgs) -> Result<(PathBuf, bool)> {
         seed: args.seed,
         out: args.out.clone(),
         resume: args.resume.clone(),
-        overrides: args.opts.overrides(),
+        overrides: Overrides {
+            init: args.init.clone(),
+            ..args.opts.overrides()
+        },
     })?;
     for note in &plan.notes {
         eprintln!("{note}");
@@ -88,9 +91,15 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
             r.max, r.min_distance, r.at_steps
         )
     });
+    let init = cfg.init.as_ref().map_or(String::new(), |p| {
+        format!(
+            "\n  init:   from the weights of {} (fine-tuning; RUN/init.json)",
+            p.display()
+        )
+    });
     format!(
         "esrl train {agent} · preset {preset} · env {env} · seed {seed}{action}\n  \
-         budget: {budget}{steps}{typical}{restart}\n  \
+         budget: {budget}{steps}{typical}{restart}{init}\n  \
          run:    {dir} (config.toml, metrics.csv, checkpoint/ every {every} rows)\n  \
          stop:   Ctrl-C or SIGTERM finishes the current {unit}, checkpoints and exits; \
          continue with `{esrl} train {agent} --resume {dir}`\n  \

@@ -92,3 +92,49 @@ fn default_run_folders_are_agent_preset_and_seed_and_never_collide() {
         "{stderr}"
     );
 }
+
+#[test]
+fn a_fine_tuning_run_says_where_it_starts_and_gets_its_own_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let common = ["--preset", "smoke", "--seed", "4", "--generations", "2"];
+    let mut args = vec!["train", "es-sac"];
+    args.extend(common);
+    let out = common::esrl_in(tmp.path(), &args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let source = "runs/es-sac-smoke-s4";
+    args.extend(["--init", source]);
+    let out = common::esrl_in(tmp.path(), &args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(
+        stderr.contains(&format!("init:   from the weights of {source}")),
+        "{stderr}"
+    );
+    let tuned = tmp.path().join("runs/es-sac-smoke-init-s4");
+    assert!(tuned.join("init.json").is_file());
+    // The source's kept policy, not its last checkpoint.
+    let record = common::read_json(&tuned.join("init.json"));
+    assert_eq!(record["folder"], format!("{source}/best"));
+    // A resume keeps where the run started.
+    let out = common::esrl_in(
+        tmp.path(),
+        &[
+            "train",
+            "es-sac",
+            "--resume",
+            "runs/es-sac-smoke-init-s4",
+            "--init",
+            source,
+        ],
+    );
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("cannot be used with"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -129,7 +129,9 @@ pub fn local_evaluator(envs: &Envs) -> Arc<dyn Evaluator> {
 }
 
 /// A fresh learner of `cfg` whose populations `evaluator` rolls out (a [`WireEvaluator`]
-/// for workers in other processes); plain learners have none and ignore it.
+/// for workers in other processes); plain learners have none and ignore it. With
+/// `cfg.init` its agent starts from those weights ([`crate::init`]), and the ES distribution
+/// is centred on their actor.
 ///
 /// [`WireEvaluator`]: esrl_es::WireEvaluator
 pub fn learner_with(
@@ -137,7 +139,8 @@ pub fn learner_with(
     envs: &Envs,
     evaluator: Arc<dyn Evaluator>,
 ) -> Result<AnyLearner> {
-    let agent = agent(cfg, envs)?;
+    let mut agent = agent(cfg, envs)?;
+    crate::init::load(cfg, &mut agent)?;
     let mirror = if cfg.rl.mirror {
         let env = WalkEnv::from_model(
             envs.model.clone().ok_or_else(|| {

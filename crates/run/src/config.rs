@@ -222,6 +222,8 @@ pub struct Overrides {
     /// Stop at the first policy at the walking bar (`Some(true)`, `--until walk`) or run the
     /// whole budget (`Some(false)`, `--until budget`); `None` keeps the config's.
     pub stop_at_walk: Option<bool>,
+    /// Start from a trained policy's weights (`init`, `--init DIR`).
+    pub init: Option<PathBuf>,
 }
 
 /// Everything a training run depends on.
@@ -273,6 +275,19 @@ pub struct TrainConfig {
     /// budget can be evaluated after `best/` has moved on. Default none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub best_every_steps: Option<u64>,
+    /// Start from the weights of a trained policy instead of drawing them from the seed
+    /// (fine-tuning, e.g. a walking policy under `[walk.perturb]`): a run folder (its kept
+    /// policy `RUN/best/`, else its last checkpoint), a `checkpoint/` or `best/` folder, or a
+    /// study record's `policy/`. The actor is loaded, and with it the critics, targets,
+    /// optimiser state and α when the folder holds them (a `policy/` keeps the actor alone);
+    /// the ES distribution is centred on the loaded actor; the replay buffer starts empty.
+    /// The policy's meaning must be the run's: the same environment, networks, action
+    /// mapping, observation (gait clock, scaling), joints and robot. A relative path is taken
+    /// from the working directory. Read once, when the run starts (a resumed run continues
+    /// from its own checkpoint); `RUN/init.json` records which weights were loaded.
+    /// `esrl train --init DIR`. Default none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub init: Option<PathBuf>,
     /// The walking environment.
     pub walk: WalkConfig,
     /// Actor and critic networks.
@@ -312,6 +327,7 @@ impl TrainConfig {
             stop_at_walk: false,
             restart: None,
             best_every_steps: None,
+            init: None,
             walk: WalkConfig::default(),
             network: NetConfig::default(),
             rl: RlConfig::for_algo(agent.algo()),
@@ -431,6 +447,9 @@ impl TrainConfig {
             cfg.seed = s;
         }
         cfg.apply_budget(opts);
+        if let Some(init) = &opts.init {
+            cfg.init = Some(init.clone());
+        }
         if let Some(u) = &opts.urdf {
             if cfg.env != EnvKind::Walk {
                 bail!(

@@ -13,7 +13,8 @@
 //!   training of either kind of learner, for front ends.
 //! - [`check`]: the walking check, a deterministic multi-start evaluation against the
 //!   walking bar that chooses `RUN/best/` and times the first walk; [`restart`]: a run
-//!   started over from another seed when its checks show it has not got going.
+//!   started over from another seed when its checks show it has not got going; [`init`]: a
+//!   run that starts from a trained policy's weights (fine-tuning).
 //! - [`checkpoint`], [`run_dir`], [`summary`]: the files, written atomically and verified
 //!   before they are trusted.
 //!
@@ -49,6 +50,7 @@ pub mod checkpoint;
 mod compat;
 pub mod config;
 mod error;
+pub mod init;
 pub mod pace;
 pub mod plan;
 pub mod restart;

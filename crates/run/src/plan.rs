@@ -42,8 +42,9 @@ pub struct TrainPlan {
 
 /// Where a run goes by default: `runs/<agent>-s<seed>` for the default preset on the walking
 /// env, `runs/<agent>-<preset>-s<seed>` for another preset (`runs/es-sac-quick-s0`), with
-/// `-<env>` before the seed on another env (`runs/sac-paper-pendulum-s0`), so the quick
-/// start's commands never share a folder.
+/// `-<env>` before the seed on another env (`runs/sac-paper-pendulum-s0`) and `-init` for a
+/// run that starts from a trained policy (`runs/es-sac-init-s4`), so the quick start's
+/// commands never share a folder.
 pub fn default_out(cfg: &TrainConfig) -> PathBuf {
     let mut name = cfg.agent.name().to_owned();
     if cfg.preset != Preset::default() {
@@ -51,6 +52,10 @@ pub fn default_out(cfg: &TrainConfig) -> PathBuf {
     }
     if cfg.env != EnvKind::Walk {
         name = format!("{name}-{}", cfg.env.name());
+    }
+    if cfg.init.is_some() {
+        // A fine-tuning run is not the run of its seed.
+        name = format!("{name}-init");
     }
     PathBuf::from("runs").join(format!("{name}-s{}", cfg.seed))
 }
@@ -85,6 +90,12 @@ pub fn plan(req: &TrainRequest) -> Result<TrainPlan> {
             notes: Vec::new(),
         });
     };
+    if let Some(init) = &req.overrides.init {
+        bail!(
+            "--init {}: a resumed run continues from its own checkpoint (its config.toml says              where it started); fine-tune into a new folder with --out instead",
+            init.display()
+        );
+    }
     let path = dir.join(RunDir::CONFIG);
     if !path.exists() {
         bail!(

@@ -76,8 +76,9 @@ pub const RESTARTS_FILE: &str = "restarts.json";
 pub const RESTARTS_DIR: &str = "restarts";
 
 /// Entries of a run folder that belong to the run rather than to one attempt.
-const RUN_ENTRIES: [&str; 4] = [
+const RUN_ENTRIES: [&str; 5] = [
     RunDir::CONFIG,
+    crate::init::INIT_FILE,
     crate::training::LOCK_FILE,
     RESTARTS_FILE,
     RESTARTS_DIR,

@@ -8,8 +8,10 @@
 
 use crate::build::{self, AnyLearner, Envs};
 use crate::check::CheckRecord;
+use crate::checkpoint;
 use crate::config::TrainConfig;
 use crate::error::{Error, Result};
+use crate::init;
 use crate::pace::Estimate;
 use crate::restart::{self, Restart};
 use crate::training::{Attempt, Opening, RowDone, Training};
@@ -69,8 +71,17 @@ impl Session {
         } else {
             Vec::new()
         };
+        // A run resumed from its checkpoint takes its weights from there, not from `init`
+        // (whose folder need not exist any more); a restart still to be settled deletes the
+        // checkpoint, and the next attempt starts from `init`.
+        let from_checkpoint =
+            resume && earlier.last().is_none_or(|r| r.settled) && checkpoint::find(root).is_some();
         let attempt = Attempt::after(cfg.seed, earlier)?;
-        let learner = build::learner_with(&cfg.with_seed(attempt.seed), envs, evaluator.clone())?;
+        let mut attempt_cfg = cfg.with_seed(attempt.seed);
+        if from_checkpoint {
+            attempt_cfg.init = None;
+        }
+        let learner = build::learner_with(&attempt_cfg, envs, evaluator.clone())?;
         let make = envs.make.clone();
         let (training, opening) = match learner {
             AnyLearner::Plain(t) => {
@@ -82,6 +93,9 @@ impl Session {
                 (Either::Hybrid(Box::new(t)), o)
             }
         };
+        if let (Some(from), Opening::New | Opening::StartedOver) = (&cfg.init, &opening) {
+            init::write(root, &init::record(from)?)?;
+        }
         let (rows, steps) = each!(&training, t => (t.rows(), t.learner().env_steps()));
         let session = Session {
             training,

@@ -21,6 +21,11 @@
 //! config = "overlays/mirror.toml" # a file laid over the preset (relative to this file)
 //! set = { rl = { mirror = true } } # or keys inline
 //! steps = 2000000                 # budget: steps, generations, episodes
+//!
+//! [[arm]]
+//! name = "fine-tuned"
+//! agent = "es-sac"
+//! set = { init = "walker/records/default-s4/policy" } # start from a policy (relative to this file)
 //! ```
 //!
 //! ```text
@@ -258,6 +263,11 @@ impl Study {
                         .with_context(|| format!("arm `{}`: its `set` keys", arm.name))?;
                     cfg.validate()
                         .with_context(|| format!("arm `{}`: its `set` keys", arm.name))?;
+                }
+                // A policy to start from is named from the study file's folder, as its
+                // config files are.
+                if let Some(init) = cfg.init.as_mut().filter(|p| p.is_relative()) {
+                    *init = base.join(&*init);
                 }
                 runs.push((i, seed, cfg));
             }

@@ -60,6 +60,9 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("--generations", type=int, help="generations for ES agents")
     t.add_argument("--episodes", type=int, help="episodes for plain agents")
     t.add_argument("--steps", type=int, help="environment-step budget (any agent)")
+    t.add_argument("--init", metavar="DIR",
+                   help="start from a trained policy's weights (fine-tuning): a run folder, "
+                   "its best/ or checkpoint/, or a study record's policy/")
     t.add_argument("--until", choices=["walk", "budget"],
                    help="walk: stop at the first policy at the walking bar; budget: run the "
                    "whole budget [default: the config's]")
@@ -268,7 +271,7 @@ def train(argv: List[str]) -> int:
             args.agent, seed=args.seed, out=args.out, resume=args.resume, preset=args.preset,
             config=args.config, env=args.env, urdf=args.urdf, threads=args.threads,
             generations=args.generations, episodes=args.episodes, steps=args.steps,
-            until=args.until,
+            until=args.until, init=args.init,
         )
     except (_native.EsrlError, ValueError, OSError) as e:
         print(f"error: {e}", file=sys.stderr)

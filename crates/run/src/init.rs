@@ -1,0 +1,162 @@
+//! Starting a run from a trained policy's weights (`init` in `config.toml`,
+//! `esrl train --init DIR`): fine-tuning.
+//!
+//! A run with `init = "DIR"` builds its learner as usual and then replaces the agent's
+//! weights with those of the policy in `DIR` before anything trains: the actor, and the
+//! critics, their targets, the optimiser state and α when the folder holds them
+//! (`agent.safetensors`: a checkpoint or `RUN/best/`; a study record's `policy/` keeps the
+//! actor alone, and the critics are then fresh). The hybrid loop's ES distribution is
+//! centred on the loaded actor. The replay buffer starts empty and fills as any run's does.
+//! Everything else is the run's own configuration: its reward, its disturbances
+//! (`[walk.perturb]`), its budget and its walking check, which judges the run's own task.
+//!
+//! The loaded policy must mean what the run's policy means: the same environment, networks,
+//! action mapping, observation (gait clock period, scaling), actuated joints, feet, standing
+//! pose and robot. [`meaning_differences`] names what differs, and such a start is refused.
+//!
+//! `DIR` is read when the run starts (and when a run killed before its first checkpoint
+//! starts over); a resumed run continues from its own checkpoint and does not read it again.
+//! `RUN/init.json` ([`InitRecord`]) records the folder and the SHA-256 of the weights loaded.
+//! A run with `[restart]` starts every attempt from the same weights.
+
+use crate::bail;
+use crate::checkpoint::{self, sha256_file};
+use crate::config::{config_differences, TrainConfig};
+use crate::error::{Context, Result};
+use crate::run_dir::{write_json_atomic, RunDir};
+use esrl_agents::Agent;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// The file in a run folder that says which weights the run started from.
+pub const INIT_FILE: &str = "init.json";
+
+/// What `RUN/init.json` says about the weights a run started from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct InitRecord {
+    /// The run's `init` as configured.
+    pub from: PathBuf,
+    /// The policy folder the weights were read from ([`policy_folder`]).
+    pub folder: PathBuf,
+    /// Whether the critics, targets, optimiser state and α were loaded too (else the actor
+    /// alone).
+    pub critics: bool,
+    /// The weights file loaded (`agent.safetensors` or `actor.safetensors`).
+    pub file: String,
+    /// Its SHA-256.
+    pub sha256: String,
+}
+
+/// The policy folder `path` names: `path` itself when it holds weights (a checkpoint,
+/// `best/` or a study record's `policy/`), or, for a run folder, its kept policy
+/// `RUN/best/`, else its last checkpoint.
+pub fn policy_folder(path: &Path) -> Result<PathBuf> {
+    if !path.is_dir() {
+        bail!(
+            "init = {}: no such folder (a run folder, its best/ or checkpoint/, or a study \
+             record's policy/)",
+            path.display()
+        );
+    }
+    if path.join("agent.safetensors").is_file() || path.join("actor.safetensors").is_file() {
+        return Ok(path.to_path_buf());
+    }
+    if path.join(RunDir::CONFIG).is_file() {
+        let best = path.join(checkpoint::BEST);
+        if best.join("agent.safetensors").is_file() {
+            return Ok(best);
+        }
+        if let Some(dir) = checkpoint::find(path) {
+            return Ok(dir);
+        }
+    }
+    bail!(
+        "init = {}: holds no policy (no agent.safetensors or actor.safetensors, and no run \
+         folder with best/ or a checkpoint)",
+        path.display()
+    )
+}
+
+/// The configuration the policy in `folder` was trained with: its own copy, checked
+/// against its run's `config.toml` when it sits in a run folder ([`checkpoint::policy_config`]).
+fn source_config(folder: &Path) -> Result<TrainConfig> {
+    let run = folder
+        .parent()
+        .filter(|p| p.join(RunDir::CONFIG).is_file())
+        .unwrap_or(folder);
+    checkpoint::policy_config(run, folder)
+}
+
+/// The keys that give a policy its meaning: its inputs, its outputs and the body they act on.
+/// A key matches itself and everything under it, except `walk.gait_clock:` (the clock's
+/// presence) and `walk.gait_clock.period` (what its phase input means): the clock's reward
+/// terms may change.
+const MEANING_KEYS: [&str; 12] = [
+    "env:",
+    "network",
+    "walk.urdf",
+    "walk.control_period",
+    "walk.action",
+    "walk.target.range",
+    "walk.gait_clock:",
+    "walk.gait_clock.period",
+    "walk.normalize_obs",
+    "walk.actuated_joints",
+    "walk.foot_links",
+    "walk.standing_pose",
+];
+
+/// Where the policy trained under `source` would mean something else under `cfg`, as
+/// `key: source vs run`.
+pub fn meaning_differences(source: &TrainConfig, cfg: &TrainConfig) -> Result<Vec<String>> {
+    Ok(config_differences(source, cfg)?
+        .into_iter()
+        .filter(|d| MEANING_KEYS.iter().any(|k| d.starts_with(k)))
+        .collect())
+}
+
+/// Loads the weights `cfg.init` names into `agent`, when it names some, and says what was
+/// loaded. Refuses a policy whose meaning differs from the run's ([`meaning_differences`]).
+pub fn load(cfg: &TrainConfig, agent: &mut Agent) -> Result<Option<InitRecord>> {
+    let Some(from) = &cfg.init else {
+        return Ok(None);
+    };
+    let folder = policy_folder(from)?;
+    let source = source_config(&folder)
+        .with_context(|| format!("init = {}: its configuration", from.display()))?;
+    let diff = meaning_differences(&source, cfg)?;
+    if !diff.is_empty() {
+        bail!(
+            "init = {}: the policy was trained for another task or network than this run's \
+             ({}; the policy's vs the run's), so its weights would mean something else here",
+            from.display(),
+            diff.join(", ")
+        );
+    }
+    checkpoint::load_agent(&folder, agent)
+        .with_context(|| format!("init = {}: loading its weights", from.display()))?;
+    record(from).map(Some)
+}
+
+/// What a run with `init = from` loads: the folder, which file, and its SHA-256.
+pub fn record(from: &Path) -> Result<InitRecord> {
+    let folder = policy_folder(from)?;
+    let critics = checkpoint::has_critics(&folder);
+    let file = if critics {
+        "agent.safetensors"
+    } else {
+        "actor.safetensors"
+    };
+    Ok(InitRecord {
+        from: from.to_path_buf(),
+        sha256: sha256_file(&folder.join(file))?,
+        folder,
+        critics,
+        file: file.into(),
+    })
+}
+
+/// Writes `RUN/init.json`.
+pub fn write(root: &Path, record: &InitRecord) -> Result<()> {
+    write_json_atomic(&root.join(INIT_FILE), record)
+}
