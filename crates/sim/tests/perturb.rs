@@ -329,3 +329,41 @@ fn a_contact_frequency_range_draws_the_episode_s_ground() {
     assert_eq!(standing_heights(cfg), standing_height(10.0));
     assert_ne!(standing_height(10.0), standing_height(60.0));
 }
+
+#[test]
+fn randomised_episodes_draw_their_slope_in_degrees_from_the_range() {
+    let cfg = WalkConfig {
+        perturb: Perturb {
+            slope_range: Some([-5.0, 5.0]),
+            ..Perturb::default()
+        },
+        ..WalkConfig::default()
+    };
+    let mut env = WalkEnv::new(cfg).unwrap();
+    let g = env.config().physics.gravity;
+    let mut slopes = Vec::new();
+    for seed in 0..12 {
+        env.reset(seed);
+        // Gravity g·(−sin s, 0, −cos s): the slope from its components, in degrees.
+        let gravity = env.sim().world().gravity;
+        assert!((gravity.length() - g).abs() < 1e-4);
+        slopes.push((-gravity.x).atan2(-gravity.z).to_degrees());
+    }
+    assert!(
+        slopes
+            .iter()
+            .all(|s| (-5.0 - 1e-3..=5.0 + 1e-3).contains(s)),
+        "{slopes:?}"
+    );
+    assert!(
+        slopes.iter().any(|s| *s > 2.0) && slopes.iter().any(|s| *s < -2.0),
+        "uphill and downhill episodes: {slopes:?}"
+    );
+    env.reset(3);
+    let gravity = env.sim().world().gravity;
+    assert_eq!(
+        (-gravity.x).atan2(-gravity.z).to_degrees(),
+        slopes[3],
+        "the same seed draws the same slope"
+    );
+}

@@ -391,6 +391,11 @@ pub struct Perturb {
     /// and stiffer ground contact. Default none.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub contact_frequency_range: Option<[f32; 2]>,
+    /// Per episode, the ground slope in degrees drawn uniformly from `[lo, hi]` (positive
+    /// uphill along the track; replacing `physics.slope`, which is in radians): gravity
+    /// tilted about the lateral axis, as `esrl eval --perturb slope=DEG` does. Default none.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slope_range: Option<[f32; 2]>,
 }
 
 impl Default for Perturb {
@@ -406,6 +411,7 @@ impl Default for Perturb {
             mass_range: None,
             strength_range: None,
             contact_frequency_range: None,
+            slope_range: None,
         }
     }
 }
@@ -421,6 +427,7 @@ impl Perturb {
             && self.mass_range.is_none()
             && self.strength_range.is_none()
             && self.contact_frequency_range.is_none()
+            && self.slope_range.is_none()
     }
 
     fn validate(&self) -> Result<(), SimError> {
@@ -465,6 +472,7 @@ impl Perturb {
                 1.0,
                 10_000.0,
             ),
+            ("slope_range", self.slope_range, -30.0, 30.0),
         ] {
             if let Some([a, b]) = range {
                 if !(a.is_finite() && b.is_finite() && lo <= a && a <= b && b <= hi) {

@@ -599,8 +599,10 @@ impl Env for WalkEnv {
         if p.friction_range.is_some()
             || p.mass_range.is_some()
             || p.contact_frequency_range.is_some()
+            || p.slope_range.is_some()
         {
-            // Domain randomisation: this episode's friction, masses and ground contact.
+            // Domain randomisation: this episode's friction, masses, ground contact and
+            // slope.
             let mut setup = s.setup.clone();
             if let Some(r) = p.friction_range {
                 setup.physics.friction = self.disturb.uniform(r);
@@ -610,6 +612,9 @@ impl Env for WalkEnv {
             }
             if let Some(r) = p.contact_frequency_range {
                 setup.physics.contact_frequency = self.disturb.uniform(r);
+            }
+            if let Some(r) = p.slope_range {
+                setup.physics.slope = self.disturb.uniform(r).to_radians();
             }
             self.sim = RobotSim::build(s.model.clone(), &setup, &state);
         } else {
