@@ -99,6 +99,19 @@ def test_resume_ray_run_with_cli(esrl_bin: Path, reference: Dict[int, Path],
     assert_same_run(reference[4], out)
 
 
+def test_a_fine_tuning_run_on_ray_equals_the_cli_one(esrl_bin: Path, reference: Dict[int, Path],
+                                                     tmp_path: Path) -> None:
+    # Started from the weights of the 2-generation run (`--init`), on both front ends.
+    ray_run, cli_run = tmp_path / "ray", tmp_path / "cli"
+    init = str(reference[2])
+    ray_train(*SMOKE, "--init", init, "--out", str(ray_run), "--workers", "2")
+    cli(esrl_bin, "train", *SMOKE, "--init", init, "--out", str(cli_run))
+    assert_same_run(ray_run, cli_run)
+    assert (ray_run / "init.json").read_text() == (cli_run / "init.json").read_text()
+    # Not the run of its seed from drawn weights.
+    assert rows(cli_run) != rows(reference[2])
+
+
 def test_resume_refuses_new_run_options(tmp_path: Path) -> None:
     cmd = [sys.executable, "-m", "esrl_rs.ray", "train", "es-td3", "--resume", str(tmp_path),
            "--seed", "1"]

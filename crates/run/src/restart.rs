@@ -294,7 +294,13 @@ mod tests {
     fn settling_moves_the_attempt_and_keeps_the_run() {
         let tmp = tempfile::tempdir().unwrap();
         let root = tmp.path();
-        for f in ["config.toml", "metrics.jsonl", "checks.jsonl", ".lock"] {
+        for f in [
+            "config.toml",
+            "init.json",
+            "metrics.jsonl",
+            "checks.jsonl",
+            ".lock",
+        ] {
             fs::write(root.join(f), f).unwrap();
         }
         for d in ["best", "best-1M", "checkpoint", "replay"] {
@@ -326,7 +332,10 @@ mod tests {
         for gone in ["metrics.jsonl", "best", "best-1M", "checkpoint", "replay"] {
             assert!(!root.join(gone).exists(), "{gone} left the run folder");
         }
-        assert!(root.join("config.toml").exists() && root.join(".lock").exists());
+        // What the run started from belongs to every attempt.
+        for kept in ["config.toml", "init.json", ".lock"] {
+            assert!(root.join(kept).exists(), "{kept} stays");
+        }
         assert!(!dest.join("checkpoint").exists() && !dest.join("replay").exists());
         let read_back = read(root).unwrap();
         assert_eq!(read_back.len(), 1);

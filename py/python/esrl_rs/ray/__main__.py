@@ -247,7 +247,7 @@ def _off_main_thread(call: Callable[[], T]) -> T:
 def train(argv: List[str]) -> int:
     args = _parser().parse_args(argv)
     if args.resume is not None:
-        clash = [f"--{n}" for n in ("out", "config", "preset", "seed", "env", "urdf")
+        clash = [f"--{n}" for n in ("out", "config", "preset", "seed", "env", "urdf", "init")
                  if getattr(args, n) is not None]
         if clash:
             print(f"error: --resume cannot be used with {', '.join(clash)} (the run's "
