@@ -92,8 +92,18 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
         )
     });
     let init = cfg.init.as_ref().map_or(String::new(), |p| {
+        // A trained run's σ has decayed toward σ_min; perturbations at a larger σ and one
+        // sampled rollout each replace the loaded walk within a generation (results/fine-tune).
+        let sigma = if cfg.agent.is_hybrid() && cfg.es.sigma > 1.5 * cfg.es.sigma_min {
+            format!(
+                "; the ES starts at σ = {}, a trained run's had decayed toward σ_min = {}:                  `es = {{ sigma = {} }}` keeps the loaded policy's neighbourhood",
+                cfg.es.sigma, cfg.es.sigma_min, cfg.es.sigma_min
+            )
+        } else {
+            String::new()
+        };
         format!(
-            "\n  init:   from the weights of {} (fine-tuning; RUN/init.json)",
+            "\n  init:   from the weights of {} (fine-tuning; RUN/init.json){sigma}",
             p.display()
         )
     });

@@ -114,6 +114,8 @@ fn a_fine_tuning_run_says_where_it_starts_and_gets_its_own_folder() {
         stderr.contains(&format!("init:   from the weights of {source}")),
         "{stderr}"
     );
+    // The smoke preset's σ (the paper's 0.25) is far above σ_min: the banner says so.
+    assert!(stderr.contains("`es = { sigma = 0.01 }`"), "{stderr}");
     let tuned = tmp.path().join("runs/es-sac-smoke-init-s4");
     assert!(tuned.join("init.json").is_file());
     // The source's kept policy, not its last checkpoint.
