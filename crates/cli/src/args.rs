@@ -174,6 +174,11 @@ pub struct EvalArgs {
     /// (control steps).
     #[arg(long, value_name = "KIND=VALUE")]
     pub perturb: Vec<String>,
+    /// Evaluate on the run's task without its training-time disturbances (`[walk.perturb]`):
+    /// how a policy trained under randomization walks on the plain track (--perturb then
+    /// disturbs the plain task, as the robustness card does).
+    #[arg(long)]
+    pub undisturbed: bool,
     /// Also run the robustness card: the policy under pushes, friction, mass, strength,
     /// slopes, noise and delay at several magnitudes, --episodes each (into the report's
     /// `robustness`).

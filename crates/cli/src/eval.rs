@@ -27,24 +27,34 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let pick = if args.last { Pick::Last } else { Pick::Kept };
     let kept = load_run_pick(&args.path, pick)?;
     eprintln!("evaluating {}", which_policy(&kept));
-    let loaded = if perturb.is_empty() {
+    let loaded = if perturb.is_empty() && !args.undisturbed {
         kept
     } else {
         let mut walk = kept.config.walk.clone();
+        if args.undisturbed {
+            if walk.perturb.is_none() {
+                eprintln!("--undisturbed: the run trained without disturbances");
+            } else {
+                eprintln!("without the run's training-time disturbances ([walk.perturb])");
+            }
+            walk.perturb = esrl_sim::Perturb::default();
+        }
         for d in &perturb {
             d.apply(&mut walk);
         }
-        eprintln!(
-            "under {}",
-            perturb
-                .iter()
-                .map(|d| {
-                    let (v, unit) = d.magnitude();
-                    format!("{} {v} {unit}", d.name())
-                })
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
+        if !perturb.is_empty() {
+            eprintln!(
+                "under {}",
+                perturb
+                    .iter()
+                    .map(|d| {
+                        let (v, unit) = d.magnitude();
+                        format!("{} {v} {unit}", d.name())
+                    })
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            );
+        }
         kept.with_walk(walk)?
     };
     crate::signals::install();
@@ -61,6 +71,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         &options,
     )?;
     report.perturb = perturb;
+    report.undisturbed = args.undisturbed;
     if args.robustness {
         eprintln!(
             "robustness card: {} disturbances × {} episodes",

@@ -64,3 +64,60 @@ fn perturbed_evaluations_and_the_card() {
         serde_json::json!({"kind": "delay", "value": 2})
     );
 }
+
+#[test]
+fn undisturbed_evaluates_a_randomized_policy_on_the_plain_task() {
+    let tmp = tempfile::tempdir().unwrap();
+    let overlay = tmp.path().join("noisy.toml");
+    std::fs::write(
+        &overlay,
+        "[walk.perturb]\nobs_noise = 0.3\nfriction_range = [0.5, 1.0]\n",
+    )
+    .unwrap();
+    let run = tmp.path().join("run");
+    smoke(
+        "es-sac",
+        &run,
+        &["--generations", "1", "--config", overlay.to_str().unwrap()],
+    );
+    // The same weights in two policy folders (a study record's layout): one with the run's
+    // config, one with its [walk.perturb] table removed by hand.
+    let (noisy, plain) = (tmp.path().join("noisy"), tmp.path().join("plain"));
+    for dir in [&noisy, &plain] {
+        std::fs::create_dir(dir).unwrap();
+        for f in ["actor.safetensors", "config.toml"] {
+            std::fs::copy(run.join("best").join(f), dir.join(f)).unwrap();
+        }
+    }
+    let text = std::fs::read_to_string(plain.join("config.toml")).unwrap();
+    let mut table: toml::Table = toml::from_str(&text).unwrap();
+    let walk = table["walk"].as_table_mut().unwrap();
+    assert!(
+        walk.remove("perturb").is_some(),
+        "the run trained disturbed"
+    );
+    std::fs::write(plain.join("config.toml"), toml::to_string(&table).unwrap()).unwrap();
+
+    let eval = |dir: &std::path::Path, extra: &[&str], name: &str| {
+        let out = tmp.path().join(name);
+        let mut args = vec![
+            "eval",
+            dir.to_str().unwrap(),
+            "--episodes",
+            "2",
+            "--traces",
+            "0",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        ok(&args);
+        read_json(&out)
+    };
+    let undisturbed = eval(&noisy, &["--undisturbed"], "u.json");
+    let reference = eval(&plain, &[], "p.json");
+    let disturbed = eval(&noisy, &[], "d.json");
+    assert_eq!(undisturbed["undisturbed"], true);
+    assert_eq!(undisturbed["episodes"], reference["episodes"]);
+    assert_ne!(disturbed["episodes"], reference["episodes"]);
+}

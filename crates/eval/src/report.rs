@@ -216,6 +216,10 @@ pub struct EvalReport {
     /// The disturbances the episodes ran under (`esrl eval --perturb`; empty: none).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub perturb: Vec<crate::disturbance::Disturbance>,
+    /// Whether the episodes ran without the run's own training-time disturbances
+    /// (`[walk.perturb]`; `esrl eval --undisturbed`), `perturb` then added to the plain task.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub undisturbed: bool,
     /// The robustness card (`esrl eval --robustness`): the policy under each disturbance of
     /// the standard set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -314,6 +318,7 @@ pub fn evaluate_with(
         episodes: results,
         mean,
         perturb: Vec::new(),
+        undisturbed: false,
         robustness: None,
     })
 }
