@@ -100,13 +100,21 @@ impl PolicyCore {
 
 #[pymethods]
 impl PolicyCore {
-    /// Loads a run folder (its newest complete checkpoint) or a checkpoint folder inside one.
+    /// Loads a run folder (its newest complete checkpoint) or a checkpoint folder inside one;
+    /// `undisturbed`: on the run's task without its training-time disturbances
+    /// (`[walk.perturb]`, as `esrl eval --undisturbed`).
     #[staticmethod]
-    fn load(py: Python<'_>, path: PathBuf) -> PyResult<Self> {
+    #[pyo3(signature = (path, undisturbed=false))]
+    fn load(py: Python<'_>, path: PathBuf, undisturbed: bool) -> PyResult<Self> {
         check_exists(&path)?;
-        let loaded = py
+        let mut loaded = py
             .detach(|| esrl_eval::load_run(&path))
             .map_err(run_error)?;
+        if undisturbed {
+            let mut walk = loaded.config.walk.clone();
+            walk.perturb = esrl_sim::Perturb::default();
+            loaded = loaded.with_walk(walk).map_err(run_error)?;
+        }
         let (obs_dim, act_dim) = (loaded.agent.obs_dim(), loaded.agent.act_dim());
         let stepper = Stepper {
             policy: loaded.agent.policy(),

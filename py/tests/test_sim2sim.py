@@ -162,3 +162,17 @@ def test_targets_follow_the_joint_ranges() -> None:
                                                 mj.hi[left]))
         assert t[right] == pytest.approx(np.clip(
             mj.q_stand[right] + float(walk["target"]["range"]) * a, mj.lo[right], mj.hi[right]))
+
+
+def test_a_policy_trained_under_disturbances_is_checked_on_the_plain_task() -> None:
+    """A policy trained with `[walk.perturb]` runs in both engines without it: esrl's side
+    is `esrl eval --undisturbed`'s (Policy.load(undisturbed=True)), not its own task's."""
+    randomized = FLAGSHIP.parents[1] / "torque-randomized" / "records" / "randomized-s4" / "policy"
+    r = cross_check(str(randomized), episodes=1, seed=1000)
+    plain = esrl_rs.load_policy(randomized, undisturbed=True)
+    assert not plain._core.walk_config.get("perturb")
+    assert esrl_rs.load_policy(randomized)._core.walk_config.get("perturb")
+    g = plain.evaluate(1, 1000)["episodes"][0]["gait"]
+    assert r["esrl"]["speed"] == pytest.approx(g["mean_forward_velocity"])
+    own = esrl_rs.load_policy(randomized).evaluate(1, 1000)["episodes"][0]["gait"]
+    assert own["mean_forward_velocity"] != pytest.approx(g["mean_forward_velocity"])

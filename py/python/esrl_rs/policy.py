@@ -24,13 +24,15 @@ class Policy:
         self._core = core
 
     @classmethod
-    def load(cls, path: Union[str, "os.PathLike[str]"]) -> "Policy":
+    def load(cls, path: Union[str, "os.PathLike[str]"], undisturbed: bool = False) -> "Policy":
         """Loads a run folder (its newest complete checkpoint), a checkpoint folder inside
         one, or a policy folder that keeps the actor alone (a study record's ``policy/``:
         ``actor.safetensors`` and its ``config.toml``; it has no critics, so :meth:`q0`
-        raises ``ValueError`` there). Raises ``FileNotFoundError`` (no folder, no checkpoint) or ``ValueError`` (a
+        raises ``ValueError`` there). ``undisturbed``: on the run's task without its
+        training-time disturbances (``[walk.perturb]``; ``esrl eval --undisturbed``).
+        Raises ``FileNotFoundError`` (no folder, no checkpoint) or ``ValueError`` (a
         config or checkpoint that cannot be used)."""
-        return cls(PolicyCore.load(os.fspath(path)))
+        return cls(PolicyCore.load(os.fspath(path), bool(undisturbed)))
 
     def __repr__(self) -> str:
         return f"Policy(agent={self.agent!r}, env={self.env!r}, checkpoint={self.checkpoint!r})"
@@ -109,6 +111,6 @@ class Policy:
         return episodes[0]
 
 
-def load_policy(path: Union[str, "os.PathLike[str]"]) -> Policy:
+def load_policy(path: Union[str, "os.PathLike[str]"], undisturbed: bool = False) -> Policy:
     """:meth:`Policy.load`."""
-    return Policy.load(path)
+    return Policy.load(path, undisturbed)

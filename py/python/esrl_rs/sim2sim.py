@@ -376,7 +376,9 @@ def cross_checks(path: str, episodes: int, seed: int,
     once."""
     from .policy import load_policy
 
-    policy = load_policy(path)
+    # Both engines run the plain task: a policy trained under disturbances ([walk.perturb])
+    # is cross-checked without them, as `esrl eval --undisturbed` evaluates it.
+    policy = load_policy(path, undisturbed=True)
     if policy.env != "walk":
         raise ValueError(f"{path}: a {policy.env} run; sim2sim is for the walking task")
     walk = policy._core.walk_config
