@@ -96,7 +96,8 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
         // sampled rollout each replace the loaded walk within a generation (results/fine-tune).
         let sigma = if cfg.agent.is_hybrid() && cfg.es.sigma > 1.5 * cfg.es.sigma_min {
             format!(
-                "; the ES starts at σ = {}, a trained run's had decayed toward σ_min = {}:                  `es = {{ sigma = {} }}` keeps the loaded policy's neighbourhood",
+                "; the ES starts at σ = {}, a trained run's had decayed toward σ_min = {}: \
+                 `es = {{ sigma = {} }}` keeps the loaded policy's neighbourhood",
                 cfg.es.sigma, cfg.es.sigma_min, cfg.es.sigma_min
             )
         } else {

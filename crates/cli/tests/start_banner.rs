@@ -110,8 +110,13 @@ fn a_fine_tuning_run_says_where_it_starts_and_gets_its_own_folder() {
     let out = common::esrl_in(tmp.path(), &args);
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{stderr}");
+    // The path is kept absolute, so the run continues from any working directory.
+    let absolute = tmp.path().canonicalize().unwrap().join(source);
     assert!(
-        stderr.contains(&format!("init:   from the weights of {source}")),
+        stderr.contains(&format!(
+            "init:   from the weights of {} (fine-tuning",
+            absolute.display()
+        )) || stderr.contains(&format!("{source} (fine-tuning")),
         "{stderr}"
     );
     // The smoke preset's σ (the paper's 0.25) is far above σ_min: the banner says so.
@@ -120,7 +125,14 @@ fn a_fine_tuning_run_says_where_it_starts_and_gets_its_own_folder() {
     assert!(tuned.join("init.json").is_file());
     // The source's kept policy, not its last checkpoint.
     let record = common::read_json(&tuned.join("init.json"));
-    assert_eq!(record["folder"], format!("{source}/best"));
+    assert!(
+        record["folder"]
+            .as_str()
+            .unwrap()
+            .ends_with(&format!("{source}/best")),
+        "{record}"
+    );
+    assert!(tuned.join("init/agent.safetensors").is_file());
     // A resume keeps where the run started.
     let out = common::esrl_in(
         tmp.path(),

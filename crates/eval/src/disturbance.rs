@@ -91,9 +91,18 @@ impl Disturbance {
     }
 
     /// Lays the disturbance over a walking configuration (the result is validated when the
-    /// environment is built).
+    /// environment is built). A training range of the same quantity (`friction_range`, …)
+    /// is cleared, or every episode would draw it again over the value set here.
     pub fn apply(self, walk: &mut esrl_sim::WalkConfig) {
         let p = &mut walk.perturb;
+        match self {
+            Disturbance::Friction(_) => p.friction_range = None,
+            Disturbance::Mass(_) => p.mass_range = None,
+            Disturbance::Strength(_) => p.strength_range = None,
+            Disturbance::Slope(_) => p.slope_range = None,
+            Disturbance::Contact(_) => p.contact_frequency_range = None,
+            _ => {}
+        }
         match self {
             Disturbance::PushSagittal(v) => {
                 p.push_speed = v;
@@ -143,5 +152,26 @@ impl CardRow {
                 format!("{} {v} {unit}", d.name())
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_disturbance_replaces_the_training_range_of_its_quantity() {
+        let mut walk = esrl_sim::WalkConfig::default();
+        walk.perturb.slope_range = Some([-5.0, 5.0]);
+        walk.perturb.friction_range = Some([0.4, 1.2]);
+        walk.perturb.mass_range = Some([0.8, 1.2]);
+        Disturbance::Slope(5.0).apply(&mut walk);
+        Disturbance::Friction(0.4).apply(&mut walk);
+        assert_eq!(walk.perturb.slope_range, None);
+        assert_eq!(walk.perturb.friction_range, None);
+        assert!((walk.physics.slope - 5f32.to_radians()).abs() < 1e-7);
+        assert_eq!(walk.physics.friction, 0.4);
+        // Other quantities keep their ranges.
+        assert_eq!(walk.perturb.mass_range, Some([0.8, 1.2]));
     }
 }

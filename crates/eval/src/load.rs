@@ -26,7 +26,7 @@ impl LoadedRun {
     /// The same policy on the walking task `walk` (a disturbed copy of the run's own, for
     /// robustness tests), checked.
     pub fn with_walk(&self, walk: esrl_sim::WalkConfig) -> Result<LoadedRun> {
-        walk.validate().context("the disturbed walking task")?;
+        walk.validate().context("the walking task to evaluate on")?;
         let mut config = self.config.clone();
         config.walk = walk;
         Ok(LoadedRun {

@@ -442,14 +442,16 @@ pub fn run_config(run: &Path) -> Result<(TrainConfig, bool)> {
     Ok((cfg, changed))
 }
 
-/// Keys a run may change after a checkpoint: its budget, threads and checkpoint period.
-const FREE_KEYS: [&str; 6] = [
+/// Keys a run may change after a checkpoint: its budget, threads and checkpoint period, and
+/// the path of the policy it started from (read once; the run keeps a copy, `RUN/init/`).
+const FREE_KEYS: [&str; 7] = [
     "generations",
     "episodes",
     "max_env_steps",
     "threads",
     "checkpoint_every",
     "stop_at_walk",
+    "init",
 ];
 
 /// Differences between two configurations outside [`FREE_KEYS`].

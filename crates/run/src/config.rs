@@ -448,7 +448,8 @@ impl TrainConfig {
         }
         cfg.apply_budget(opts);
         if let Some(init) = &opts.init {
-            cfg.init = Some(init.clone());
+            // Absolute, so that the run can be continued from any working directory.
+            cfg.init = Some(std::path::absolute(init).unwrap_or_else(|_| init.clone()));
         }
         if let Some(u) = &opts.urdf {
             if cfg.env != EnvKind::Walk {

@@ -14,10 +14,11 @@
 //! action mapping, observation (gait clock period, scaling), actuated joints, feet, standing
 //! pose and robot. [`meaning_differences`] names what differs, and such a start is refused.
 //!
-//! `DIR` is read when the run starts (and when a run killed before its first checkpoint
-//! starts over); a resumed run continues from its own checkpoint and does not read it again.
-//! `RUN/init.json` ([`InitRecord`]) records the folder and the SHA-256 of the weights loaded.
-//! A run with `[restart]` starts every attempt from the same weights.
+//! `DIR` is read once, when the run starts: the weights loaded are copied into `RUN/init/`
+//! ([`snapshot`]) and `RUN/init.json` ([`InitRecord`]) records the folder and their SHA-256.
+//! A run with `[restart]` starts every attempt from that copy, and so does a run killed
+//! before its first checkpoint that starts over; a resumed run continues from its own
+//! checkpoint.
 
 use crate::bail;
 use crate::checkpoint::{self, sha256_file};
@@ -80,6 +81,9 @@ pub fn policy_folder(path: &Path) -> Result<PathBuf> {
 /// The configuration the policy in `folder` was trained with: its own copy, checked
 /// against its run's `config.toml` when it sits in a run folder ([`checkpoint::policy_config`]).
 fn source_config(folder: &Path) -> Result<TrainConfig> {
+    if is_copy(folder) {
+        return TrainConfig::load(&folder.join(RunDir::CONFIG));
+    }
     let run = folder
         .parent()
         .filter(|p| p.join(RunDir::CONFIG).is_file())
@@ -87,32 +91,45 @@ fn source_config(folder: &Path) -> Result<TrainConfig> {
     checkpoint::policy_config(run, folder)
 }
 
-/// The keys that give a policy its meaning: its inputs, its outputs and the body they act on.
-/// A key matches itself and everything under it, except `walk.gait_clock:` (the clock's
-/// presence) and `walk.gait_clock.period` (what its phase input means): the clock's reward
-/// terms may change.
-const MEANING_KEYS: [&str; 12] = [
-    "env:",
-    "network",
-    "walk.urdf",
-    "walk.control_period",
-    "walk.action",
-    "walk.target.range",
-    "walk.gait_clock:",
-    "walk.gait_clock.period",
-    "walk.normalize_obs",
-    "walk.actuated_joints",
-    "walk.foot_links",
-    "walk.standing_pose",
+/// The keys that give a policy its meaning: its inputs, its outputs and the body they act on,
+/// each with whether the keys under it count too. The gait clock counts by its presence and
+/// its period (what its phase input means); its reward terms may change.
+const MEANING_KEYS: [(&str, bool); 12] = [
+    ("env", false),
+    ("network", true),
+    ("walk.urdf", true),
+    ("walk.control_period", false),
+    ("walk.action", true),
+    ("walk.target", true),
+    ("walk.gait_clock", false),
+    ("walk.gait_clock.period", false),
+    ("walk.normalize_obs", false),
+    ("walk.actuated_joints", true),
+    ("walk.foot_links", true),
+    ("walk.standing_pose", true),
 ];
 
 /// Where the policy trained under `source` would mean something else under `cfg`, as
-/// `key: source vs run`.
+/// `key: source vs run`: the keys of [`MEANING_KEYS`], and the algorithm (an ES-SAC policy
+/// may start a SAC run, not a TD3 one).
 pub fn meaning_differences(source: &TrainConfig, cfg: &TrainConfig) -> Result<Vec<String>> {
-    Ok(config_differences(source, cfg)?
+    let mut out: Vec<String> = config_differences(source, cfg)?
         .into_iter()
-        .filter(|d| MEANING_KEYS.iter().any(|k| d.starts_with(k)))
-        .collect())
+        .filter(|d| {
+            let key = d.split_once(": ").map_or(d.as_str(), |(k, _)| k);
+            MEANING_KEYS.iter().any(|&(k, under)| {
+                key == k || (under && key.strip_prefix(k).is_some_and(|r| r.starts_with('.')))
+            })
+        })
+        .collect();
+    if source.agent.algo() != cfg.agent.algo() {
+        out.push(format!(
+            "agent: {} vs {}",
+            source.agent.name(),
+            cfg.agent.name()
+        ));
+    }
+    Ok(out)
 }
 
 /// Loads the weights `cfg.init` names into `agent`, when it names some, and says what was
@@ -156,7 +173,48 @@ pub fn record(from: &Path) -> Result<InitRecord> {
     })
 }
 
-/// Writes `RUN/init.json`.
-pub fn write(root: &Path, record: &InitRecord) -> Result<()> {
+/// The folder in a run that keeps a copy of the policy it started from.
+pub const INIT_DIR: &str = "init";
+
+/// Whether `folder` is a run's own copy of its starting policy (`RUN/init/`).
+fn is_copy(folder: &Path) -> bool {
+    folder.file_name().is_some_and(|n| n == INIT_DIR)
+        && folder.parent().is_some_and(|r| r.join(INIT_FILE).is_file())
+}
+
+/// The run's own copy of the policy it started from, once written ([`snapshot`]): what a
+/// restart, or a start over before the first checkpoint, loads instead of `init`'s folder,
+/// which may have changed or gone since.
+pub fn local(root: &Path) -> Option<PathBuf> {
+    let dir = root.join(INIT_DIR);
+    (root.join(INIT_FILE).is_file() && dir.join(RunDir::CONFIG).is_file()).then_some(dir)
+}
+
+/// Copies the policy `record` names into `RUN/init/` (its weights file and its training
+/// configuration) and writes `RUN/init.json`. Refused when the copy is not the file that
+/// was hashed when the run loaded it (the folder changed meanwhile).
+pub fn snapshot(root: &Path, record: &InitRecord) -> Result<()> {
+    let tmp = root.join("init.tmp");
+    if tmp.exists() {
+        std::fs::remove_dir_all(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
+    }
+    std::fs::create_dir_all(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
+    let from = record.folder.join(&record.file);
+    std::fs::copy(&from, tmp.join(&record.file))
+        .with_context(|| format!("copying {}", from.display()))?;
+    if sha256_file(&tmp.join(&record.file))? != record.sha256 {
+        bail!(
+            "init = {}: {} changed while the run started; start it again",
+            record.from.display(),
+            from.display()
+        );
+    }
+    let source = source_config(&record.folder)?;
+    crate::run_dir::write_atomic(&tmp.join(RunDir::CONFIG), source.to_toml()?.as_bytes())?;
+    let dir = root.join(INIT_DIR);
+    if dir.exists() {
+        std::fs::remove_dir_all(&dir).with_context(|| format!("removing {}", dir.display()))?;
+    }
+    std::fs::rename(&tmp, &dir).with_context(|| format!("moving {}", tmp.display()))?;
     write_json_atomic(&root.join(INIT_FILE), record)
 }

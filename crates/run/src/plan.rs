@@ -92,7 +92,8 @@ pub fn plan(req: &TrainRequest) -> Result<TrainPlan> {
     };
     if let Some(init) = &req.overrides.init {
         bail!(
-            "--init {}: a resumed run continues from its own checkpoint (its config.toml says              where it started); fine-tune into a new folder with --out instead",
+            "--init {}: a resumed run continues from its own checkpoint (its config.toml says \
+             where it started); fine-tune into a new folder with --out instead",
             init.display()
         );
     }

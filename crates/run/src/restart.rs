@@ -76,9 +76,10 @@ pub const RESTARTS_FILE: &str = "restarts.json";
 pub const RESTARTS_DIR: &str = "restarts";
 
 /// Entries of a run folder that belong to the run rather than to one attempt.
-const RUN_ENTRIES: [&str; 5] = [
+const RUN_ENTRIES: [&str; 6] = [
     RunDir::CONFIG,
     crate::init::INIT_FILE,
+    crate::init::INIT_DIR,
     crate::training::LOCK_FILE,
     RESTARTS_FILE,
     RESTARTS_DIR,
@@ -303,7 +304,7 @@ mod tests {
         ] {
             fs::write(root.join(f), f).unwrap();
         }
-        for d in ["best", "best-1M", "checkpoint", "replay"] {
+        for d in ["best", "best-1M", "checkpoint", "replay", "init"] {
             fs::create_dir_all(root.join(d)).unwrap();
             fs::write(root.join(d).join("x"), d).unwrap();
         }
@@ -333,7 +334,7 @@ mod tests {
             assert!(!root.join(gone).exists(), "{gone} left the run folder");
         }
         // What the run started from belongs to every attempt.
-        for kept in ["config.toml", "init.json", ".lock"] {
+        for kept in ["config.toml", "init.json", "init/x", ".lock"] {
             assert!(root.join(kept).exists(), "{kept} stays");
         }
         assert!(!dest.join("checkpoint").exists() && !dest.join("replay").exists());

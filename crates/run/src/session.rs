@@ -78,8 +78,16 @@ impl Session {
             resume && earlier.last().is_none_or(|r| r.settled) && checkpoint::find(root).is_some();
         let attempt = Attempt::after(cfg.seed, earlier)?;
         let mut attempt_cfg = cfg.with_seed(attempt.seed);
+        let mut loaded = None;
         if from_checkpoint {
             attempt_cfg.init = None;
+        } else if attempt_cfg.init.is_some() {
+            // The run's own copy once it has one (a start over, a pending restart), else
+            // the folder `init` names, hashed before it is read.
+            match init::local(root).filter(|_| resume) {
+                Some(copy) => attempt_cfg.init = Some(copy),
+                None => loaded = attempt_cfg.init.as_deref().map(init::record).transpose()?,
+            }
         }
         let learner = build::learner_with(&attempt_cfg, envs, evaluator.clone())?;
         let make = envs.make.clone();
@@ -93,8 +101,8 @@ impl Session {
                 (Either::Hybrid(Box::new(t)), o)
             }
         };
-        if let (Some(from), Opening::New | Opening::StartedOver) = (&cfg.init, &opening) {
-            init::write(root, &init::record(from)?)?;
+        if let (Some(record), Opening::New | Opening::StartedOver) = (&loaded, &opening) {
+            init::snapshot(root, record)?;
         }
         let (rows, steps) = each!(&training, t => (t.rows(), t.learner().env_steps()));
         let session = Session {
@@ -139,7 +147,18 @@ impl Session {
             return Ok(None);
         }
         let (record, next) = each!(&mut self.training, t => t.abandon())?;
-        let cfg = self.cfg.with_seed(next.seed);
+        let mut cfg = self.cfg.with_seed(next.seed);
+        if cfg.init.is_some() {
+            // Every attempt starts from the run's copy of the policy it started from.
+            let root = each!(&self.training, t => t.root().to_path_buf());
+            cfg.init = Some(init::local(&root).ok_or_else(|| {
+                Error::Msg(format!(
+                    "{}: the copy of the starting policy ({}/) is missing",
+                    root.display(),
+                    init::INIT_DIR
+                ))
+            })?);
+        }
         let learner = build::learner_with(&cfg, &self.envs, self.evaluator.clone())?;
         match (&mut self.training, learner) {
             (Either::Plain(t), AnyLearner::Plain(l)) => t.start_over(*l, next)?,

@@ -288,6 +288,11 @@ impl<L: Learner> Training<L> {
         })
     }
 
+    /// The run folder.
+    pub fn root(&self) -> &Path {
+        &self.root
+    }
+
     /// Which attempt of the run this is.
     pub fn attempt(&self) -> &Attempt {
         &self.attempt

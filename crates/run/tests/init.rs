@@ -82,7 +82,22 @@ fn a_run_starts_from_the_policy_it_names() {
         .unwrap()
         .init
         .is_some_and(|p| p == source));
+    // The run keeps a copy of the weights it loaded, with the source's configuration.
+    let copy = tuned.join("init");
+    let bytes = std::fs::read(copy.join("agent.safetensors")).unwrap();
+    assert_eq!(
+        bytes,
+        std::fs::read(kept.join("agent.safetensors")).unwrap()
+    );
     std::fs::remove_dir_all(&source).unwrap();
+    // What a restart loads once the source is gone: the copy, the same tensors.
+    let from_copy = tensors(&hybrid(&TrainConfig {
+        init: Some(copy),
+        ..cfg.clone()
+    }));
+    for (name, data) in &want {
+        assert_eq!(&from_copy[name], data, "{name}");
+    }
     let more = TrainConfig {
         generations: cfg.generations + 1,
         ..cfg.clone()
@@ -138,6 +153,34 @@ fn a_policy_for_another_network_or_action_is_refused() {
         .unwrap()
         .to_string();
     assert!(err.contains("walk.action"), "{err}");
+
+    let mut spans = smoke(2, Some(source.clone()));
+    spans
+        .walk
+        .target
+        .joint_range
+        .insert("left_knee".into(), 0.6);
+    let err = build::learner(&spans, &envs_of(&spans))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("walk.target.joint_range"), "{err}");
+
+    let td3 = TrainConfig::resolve(
+        AgentKind::EsTd3,
+        &Overrides {
+            preset: Preset::Smoke,
+            init: Some(source.clone()),
+            ..Overrides::default()
+        },
+        Some(2),
+    )
+    .unwrap();
+    let err = build::learner(&td3, &envs_of(&td3))
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(err.contains("agent: es-sac vs es-td3"), "{err}");
 
     // Another reward or budget is what fine-tuning is for.
     let mut reward = smoke(2, Some(source.clone()));

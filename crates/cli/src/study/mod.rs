@@ -267,7 +267,8 @@ impl Study {
                 // A policy to start from is named from the study file's folder, as its
                 // config files are.
                 if let Some(init) = cfg.init.as_mut().filter(|p| p.is_relative()) {
-                    *init = base.join(&*init);
+                    let path = base.join(&*init);
+                    *init = std::path::absolute(&path).unwrap_or(path);
                 }
                 runs.push((i, seed, cfg));
             }
