@@ -132,11 +132,12 @@ pub fn meaning_differences(source: &TrainConfig, cfg: &TrainConfig) -> Result<Ve
     Ok(out)
 }
 
-/// Loads the weights `cfg.init` names into `agent`, when it names some, and says what was
-/// loaded. Refuses a policy whose meaning differs from the run's ([`meaning_differences`]).
-pub fn load(cfg: &TrainConfig, agent: &mut Agent) -> Result<Option<InitRecord>> {
+/// Loads the weights `cfg.init` names into `agent`, when it names some. Refuses a policy
+/// whose meaning differs from the run's ([`meaning_differences`]). What was loaded is
+/// [`record`]'s to say (the session hashes it once, before loading).
+pub fn load(cfg: &TrainConfig, agent: &mut Agent) -> Result<()> {
     let Some(from) = &cfg.init else {
-        return Ok(None);
+        return Ok(());
     };
     let folder = policy_folder(from)?;
     let source = source_config(&folder)
@@ -151,8 +152,7 @@ pub fn load(cfg: &TrainConfig, agent: &mut Agent) -> Result<Option<InitRecord>> 
         );
     }
     checkpoint::load_agent(&folder, agent)
-        .with_context(|| format!("init = {}: loading its weights", from.display()))?;
-    record(from).map(Some)
+        .with_context(|| format!("init = {}: loading its weights", from.display()))
 }
 
 /// What a run with `init = from` loads: the folder, which file, and its SHA-256.

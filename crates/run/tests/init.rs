@@ -137,21 +137,16 @@ fn a_policy_for_another_network_or_action_is_refused() {
     let source = dir.path().join("source");
     train(&smoke(1, None), &source, false);
     let envs_of = |c: &TrainConfig| build::envs(c.env, &c.walk).unwrap();
+    let refusal = |c: &TrainConfig| build::learner(c, &envs_of(c)).err().unwrap().to_string();
 
     let mut wider = smoke(2, Some(source.clone()));
     wider.network.actor.fc = vec![24];
-    let err = build::learner(&wider, &envs_of(&wider))
-        .err()
-        .unwrap()
-        .to_string();
+    let err = refusal(&wider);
     assert!(err.contains("network.actor.fc"), "{err}");
 
     let mut targets = smoke(2, Some(source.clone()));
     targets.walk.action = esrl_sim::ActionMode::Target;
-    let err = build::learner(&targets, &envs_of(&targets))
-        .err()
-        .unwrap()
-        .to_string();
+    let err = refusal(&targets);
     assert!(err.contains("walk.action"), "{err}");
 
     let mut spans = smoke(2, Some(source.clone()));
@@ -160,10 +155,7 @@ fn a_policy_for_another_network_or_action_is_refused() {
         .target
         .joint_range
         .insert("left_knee".into(), 0.6);
-    let err = build::learner(&spans, &envs_of(&spans))
-        .err()
-        .unwrap()
-        .to_string();
+    let err = refusal(&spans);
     assert!(err.contains("walk.target.joint_range"), "{err}");
 
     let td3 = TrainConfig::resolve(
@@ -176,10 +168,7 @@ fn a_policy_for_another_network_or_action_is_refused() {
         Some(2),
     )
     .unwrap();
-    let err = build::learner(&td3, &envs_of(&td3))
-        .err()
-        .unwrap()
-        .to_string();
+    let err = refusal(&td3);
     assert!(err.contains("agent: es-sac vs es-td3"), "{err}");
 
     // Another reward or budget is what fine-tuning is for.
