@@ -7,7 +7,16 @@ set -euo pipefail
 esrl=${1:?esrl binary}; py=${2:?python with the packages of the peers}; out=${3:?output folder}
 peers="$(cd "$(dirname "$0")/../../.." && pwd)/shared/peers"
 mkdir -p "$out"
-lscpu | grep -E "Model name|^CPU\(s\)|Flags" | sed 's/Flags:.*avx512f.*/Flags: (AVX-512)/' > "$out/machine.txt"
+lscpu | grep -E "Model name|^CPU\(s\)|L2 cache|Flags" | sed 's/Flags:.*avx512f.*/Flags: (AVX-512)/' > "$out/machine.txt"
+# This core's FMA limit: NumPy's float32 2048^3 product on one thread (best of 5).
+OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 MKL_NUM_THREADS=1 "$py" -c "
+import time, numpy as np
+a = np.random.rand(2048, 2048).astype(np.float32); b = a.copy(); a @ b
+times = []
+for _ in range(5):
+    t0 = time.perf_counter(); a @ b; times.append(time.perf_counter() - t0)
+t = min(times)
+print(f'numpy float32 2048^3, 1 thread: {2 * 2048**3 / t / 1e9:.1f} GFLOP/s')" > "$out/fma-limit.txt"
 # One SAC update of the MLP 256x256 networks at the walking recipe's batch (64) and the
 # peer's (256), 1 and 2 threads; the paper-size LSTM at 256 x 8.
 for b in 64 256; do for t in 1 2; do
@@ -25,6 +34,7 @@ fi
 "$esrl" bench env --steps 40000 --json >> "$out/env.json"
 # A generation of the recipe at 1 and 2 threads.
 "$esrl" bench es --preset walking --json > "$out/es-walking.json"
+"$esrl" bench es --preset walker --json > "$out/es-walker.json"
 # The recipe's first 80,000 env steps, seed 11, at 1 and 2 threads (as the issue measured).
 for t in 1 2; do
   rm -rf "$out/run80k-t$t"
