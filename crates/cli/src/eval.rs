@@ -25,38 +25,34 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         .map(|p| Disturbance::parse(p))
         .collect::<esrl_run::Result<Vec<_>>>()?;
     let pick = if args.last { Pick::Last } else { Pick::Kept };
-    let kept = load_run_pick(&args.path, pick)?;
-    eprintln!("evaluating {}", which_policy(&kept));
-    let loaded = if perturb.is_empty() && !args.undisturbed {
-        kept
-    } else {
-        let mut walk = kept.config.walk.clone();
-        if args.undisturbed {
-            if walk.perturb.is_none() {
-                eprintln!("--undisturbed: the run trained without disturbances");
-            } else {
-                eprintln!("without the run's training-time disturbances ([walk.perturb])");
-            }
-            walk.perturb = esrl_sim::Perturb::default();
+    let mut loaded = load_run_pick(&args.path, pick)?;
+    eprintln!("evaluating {}", which_policy(&loaded));
+    if args.undisturbed {
+        if loaded.config.walk.perturb.is_none() {
+            eprintln!("--undisturbed: the run trained without disturbances");
+        } else {
+            eprintln!("without the run's training-time disturbances ([walk.perturb])");
         }
+        loaded = loaded.undisturbed()?;
+    }
+    if !perturb.is_empty() {
+        let mut walk = loaded.config.walk.clone();
         for d in &perturb {
             d.apply(&mut walk);
         }
-        if !perturb.is_empty() {
-            eprintln!(
-                "under {}",
-                perturb
-                    .iter()
-                    .map(|d| {
-                        let (v, unit) = d.magnitude();
-                        format!("{} {v} {unit}", d.name())
-                    })
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            );
-        }
-        kept.with_walk(walk)?
-    };
+        eprintln!(
+            "under {}",
+            perturb
+                .iter()
+                .map(|d| {
+                    let (v, unit) = d.magnitude();
+                    format!("{} {v} {unit}", d.name())
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+        loaded = loaded.with_walk(walk)?;
+    }
     crate::signals::install();
     let stop = || crate::signals::requested().is_some();
     let options = EvalOptions {

@@ -1,6 +1,8 @@
 //! Contract: `esrl eval --perturb KIND=VALUE` evaluates a policy under the disturbances it
 //! names (the report says which) and refuses unknown ones by name; `--robustness` adds the
-//! card: the undisturbed task and each disturbance of the standard set, in order.
+//! card: the undisturbed task and each disturbance of the standard set, in order;
+//! `--undisturbed` (and a study's `[eval] undisturbed = true`) evaluates a policy trained under
+//! disturbances on the plain task.
 
 mod common;
 
@@ -120,4 +122,81 @@ fn undisturbed_evaluates_a_randomized_policy_on_the_plain_task() {
     assert_eq!(undisturbed["undisturbed"], true);
     assert_eq!(undisturbed["episodes"], reference["episodes"]);
     assert_ne!(disturbed["episodes"], reference["episodes"]);
+}
+
+#[test]
+fn a_study_evaluates_on_the_plain_task_when_asked() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = tmp.path().join("plain.toml");
+    std::fs::write(
+        &study,
+        r#"
+seeds = [0]
+[eval]
+episodes = 2
+traces = 0
+undisturbed = true
+[[arm]]
+name = "noisy"
+agent = "es-sac"
+preset = "smoke"
+generations = 1
+set = { walk = { perturb = { obs_noise = 0.3, friction_range = [0.5, 1.0] } } }
+"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    ok(&[
+        "study",
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--no-progress",
+    ]);
+    let record = out.join("records/noisy-s0");
+    let recorded = read_json(&record.join("eval.json"));
+    assert_eq!(recorded["undisturbed"], true);
+    let policy = record.join("policy");
+    let eval = |extra: &[&str], name: &str| {
+        let o = tmp.path().join(name);
+        let mut args = vec![
+            "eval",
+            policy.to_str().unwrap(),
+            "--episodes",
+            "2",
+            "--seed",
+            "1000",
+            "--traces",
+            "0",
+            "--out",
+            o.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        ok(&args);
+        read_json(&o)
+    };
+    // The episodes without q0 (the record's policy folder holds the actor alone).
+    let episodes = |report: serde_json::Value| {
+        let mut e = report["episodes"].clone();
+        for ep in e.as_array_mut().unwrap() {
+            ep.as_object_mut().unwrap().remove("q0");
+        }
+        e
+    };
+    let plain = episodes(eval(&["--undisturbed"], "u.json"));
+    assert!(
+        episodes(recorded) == plain,
+        "the record differs from `esrl eval --undisturbed`"
+    );
+    assert!(
+        episodes(eval(&[], "d.json")) != plain,
+        "the disturbances changed nothing"
+    );
+    ok(&["study", "report", out.to_str().unwrap()]);
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains("on the plain task, without the runs' training-time disturbances"),
+        "{report}"
+    );
 }

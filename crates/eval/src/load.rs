@@ -38,6 +38,15 @@ impl LoadedRun {
         })
     }
 
+    /// The same policy on its task without the training-time disturbances (`[walk.perturb]`
+    /// cleared): how a policy trained under disturbances walks on the plain task
+    /// (`esrl eval --undisturbed`, a study's `[eval] undisturbed = true`).
+    pub fn undisturbed(&self) -> Result<LoadedRun> {
+        let mut walk = self.config.walk.clone();
+        walk.perturb = esrl_sim::Perturb::default();
+        self.with_walk(walk)
+    }
+
     /// A fresh walking environment of this run (`None` for a pendulum run).
     pub fn walk_env(&self) -> Result<Option<WalkEnv>> {
         match &self.model {

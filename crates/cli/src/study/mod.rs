@@ -10,6 +10,7 @@
 //! episodes = 20                   # deterministic episodes, reset seeds 1000, 1001, …
 //! seed = 1000
 //! policy = "kept"                 # RUN/best/ (the walking check's choice); "last": the checkpoint
+//! undisturbed = false             # true: on the plain task, without [walk.perturb]
 //!
 //! [[arm]]
 //! name = "default"
@@ -124,6 +125,10 @@ pub struct StudyEval {
     pub policy: Handover,
     /// Episodes whose per-step trace the record keeps (≈ 0.4 MB each). Default 1.
     pub traces: usize,
+    /// Evaluate on the plain task, without the runs' training-time disturbances
+    /// (`[walk.perturb]`; as `esrl eval --undisturbed`). Default false: each run's own task.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub undisturbed: bool,
 }
 
 impl Default for StudyEval {
@@ -133,6 +138,7 @@ impl Default for StudyEval {
             seed: 1000,
             policy: Handover::Kept,
             traces: 1,
+            undisturbed: false,
         }
     }
 }

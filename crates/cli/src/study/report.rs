@@ -208,8 +208,8 @@ fn heading(dir: &Path, study: &Study, recorded: usize) -> String {
     let planned = study.file.seeds.list().len();
     format!(
         "# Study: {}\n\n{} arm(s) × {planned} seed(s); {} of {} runs recorded. Each run's \
-         handed-over policy ({}) evaluated on {} deterministic episodes (reset seeds {}…). The \
-         walking bar: `walk` in more than half of the episodes and at least 80 % past the 50 m \
+         handed-over policy ({}) evaluated on {} deterministic episodes (reset seeds {}…){}. \
+         The walking bar: `walk` in more than half of the episodes and at least 80 % past the 50 m \
          line. Intervals are 95 %: Wilson for rates, percentile bootstrap over runs (2,000 \
          resamples) for the IQM and the probability of improvement (Agarwal et al. 2021).\n\n",
         if study.file.description.is_empty() {
@@ -226,6 +226,11 @@ fn heading(dir: &Path, study: &Study, recorded: usize) -> String {
         },
         study.file.eval.episodes,
         study.file.eval.seed,
+        if study.file.eval.undisturbed {
+            " on the plain task, without the runs' training-time disturbances"
+        } else {
+            ""
+        },
     )
 }
 

@@ -169,8 +169,11 @@ fn write_record(run: &Path, record: &Path, eval: &StudyEval) -> Result<()> {
         Handover::Kept => Pick::Kept,
         Handover::Last => Pick::Last,
     };
-    let loaded = load_run_pick(run, pick)?;
-    let report = evaluate_with(
+    let mut loaded = load_run_pick(run, pick)?;
+    if eval.undisturbed {
+        loaded = loaded.undisturbed()?;
+    }
+    let mut report = evaluate_with(
         &loaded,
         eval.seed,
         eval.episodes,
@@ -180,6 +183,7 @@ fn write_record(run: &Path, record: &Path, eval: &StudyEval) -> Result<()> {
             stop: None,
         },
     )?;
+    report.undisturbed = eval.undisturbed;
     let tmp = record.with_extension("tmp");
     if tmp.exists() {
         fs::remove_dir_all(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
