@@ -34,10 +34,17 @@ pub struct UpdateTiming {
     pub critic_params: usize,
 }
 
+/// Untimed updates run for at least this long before the timed ones. A pool of two threads
+/// on a machine that was idle needs it: on the 2-core Xeon the first 2-thread updates took
+/// 1.7 ms and the later ones 1.05 ms (`esrl bench update --threads 2`: 1.74 ms median over
+/// 21 reps after 2 warm-up updates, 1.05–1.07 ms over 100–1,000), while one thread is at its
+/// pace from the first update. In training the pool is never idle for long.
+const WARMUP_S: f64 = 0.5;
+
 /// Times `reps` updates of an `algo` agent with networks `nets` for observations of
 /// `obs_dim` and actions of `act_dim` on batches of `batch` sequences (recurrent) or
-/// transitions, after `warmup` untimed ones, its batch split into `batch_chunks` chunks
-/// (`rl.batch_chunks`).
+/// transitions, after `warmup` untimed ones and at least [`WARMUP_S`] of them, its batch
+/// split into `batch_chunks` chunks (`rl.batch_chunks`).
 #[allow(clippy::too_many_arguments)]
 pub fn time_update(
     algo: Algo,
@@ -53,8 +60,11 @@ pub fn time_update(
     // Back to back, as `Trainer::train` runs them: with its helper thread.
     let mut times = Vec::with_capacity(reps.max(1));
     crate::train::with_helper(|| {
-        for _ in 0..warmup {
+        let start = Instant::now();
+        let mut done = 0;
+        while done < warmup || start.elapsed().as_secs_f64() < WARMUP_S {
             run.update()?;
+            done += 1;
         }
         for _ in 0..reps.max(1) {
             times.push(run.update()? * 1e3);

@@ -337,7 +337,8 @@ pub enum BenchWhat {
         /// backward on its own thread, gradients summed in chunk order).
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
         batch_chunks: u64,
-        /// Updates timed (after 2 untimed); the median and the fastest are reported.
+        /// Updates timed (after untimed ones for at least 0.5 s); the median and the fastest
+        /// are reported.
         #[arg(long, default_value_t = 21, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
         reps: u64,
         /// Print one JSON object.
