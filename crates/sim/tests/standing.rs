@@ -7,21 +7,13 @@
 //! evaluated once per 25 ms control period cannot hold this body (crate docs, "Standing"),
 //! and that would test the controller rather than contact and integration.
 
-use esrl_sim::{Env, WalkConfig, WalkEnv};
+mod common;
+
+use esrl_sim::Env;
 
 #[test]
 fn pd_held_standing_pose_stays_up_for_a_minute() {
-    let mut env = WalkEnv::new(WalkConfig::default()).unwrap();
-    env.reset(7);
-    let target = env.standing_pose();
-    let joints: Vec<usize> = env
-        .actuated_joint_names()
-        .iter()
-        .map(|n| env.model().joint_index(n).unwrap())
-        .collect();
-    for (k, &j) in joints.iter().enumerate() {
-        env.sim_mut().set_joint_servo(j, target[k], 2000.0, 100.0);
-    }
+    let mut env = common::pd_held_standing();
     let start = env.sim().link_pose(env.model().root()).translation;
     let zero = vec![0.0; env.act_dim()];
     let mut max_drift = 0.0f32;

@@ -19,24 +19,16 @@
 //! (crouching lowers the centre of mass and raises the bound a little: 0.59 m/s at h = 0.8 m
 //! by the same formula).
 
-use esrl_sim::{Env, Shape, WalkConfig, WalkEnv};
+mod common;
+
+use esrl_sim::{Env, Shape, WalkEnv};
 
 const G: f64 = 9.81;
 
 /// The environment with every actuated joint held at the standing pose by a stiff PD servo
 /// (the one `standing.rs` stands a minute with), after 1 s of settling.
 fn standing() -> WalkEnv {
-    let mut env = WalkEnv::new(WalkConfig::default()).unwrap();
-    env.reset(7);
-    let target = env.standing_pose();
-    let joints: Vec<usize> = env
-        .actuated_joint_names()
-        .iter()
-        .map(|n| env.model().joint_index(n).unwrap())
-        .collect();
-    for (k, &j) in joints.iter().enumerate() {
-        env.sim_mut().set_joint_servo(j, target[k], 2000.0, 100.0);
-    }
+    let mut env = common::pd_held_standing();
     let zero = vec![0.0; env.act_dim()];
     for _ in 0..40 {
         assert!(!env.step(&zero).terminated, "fell while settling");

@@ -1,9 +1,10 @@
 //! Fixtures shared by the physics tests: the single pendulum with its hand-computable
 //! constants, the two free-floating bodies of the momentum tests, and the humanoid held in
-//! the air with its actuated joints as the walking task sets them up.
+//! the air with its actuated joints as the walking task sets them up, and the humanoid held
+//! in its standing pose by a stiff PD servo.
 #![allow(dead_code)]
 
-use esrl_sim::{Base, PhysicsConfig, RobotModel, SimSetup, WalkConfig};
+use esrl_sim::{Base, Env, PhysicsConfig, RobotModel, SimSetup, WalkConfig, WalkEnv};
 use std::sync::Arc;
 
 /// The pendulum's bob: 1.5 kg at l = 0.8 m below the pivot, with a small sphere-like
@@ -96,4 +97,21 @@ pub fn held_humanoid(config: &WalkConfig) -> (Arc<RobotModel>, Vec<usize>, SimSe
         armature,
     };
     (model, actuated, setup)
+}
+
+/// The default walking task reset with seed 7, every actuated joint held at the standing
+/// pose by a PD servo of `kp` = 2000, `kd` = 100 inside Rapier (evaluated every substep).
+pub fn pd_held_standing() -> WalkEnv {
+    let mut env = WalkEnv::new(WalkConfig::default()).unwrap();
+    env.reset(7);
+    let target = env.standing_pose();
+    let joints: Vec<usize> = env
+        .actuated_joint_names()
+        .iter()
+        .map(|n| env.model().joint_index(n).unwrap())
+        .collect();
+    for (k, &j) in joints.iter().enumerate() {
+        env.sim_mut().set_joint_servo(j, target[k], 2000.0, 100.0);
+    }
+    env
 }
