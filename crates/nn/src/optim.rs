@@ -97,22 +97,42 @@ pub struct AdamState {
 #[derive(Clone, Debug)]
 pub struct Adam {
     config: AdamConfig,
-    /// 1 where L2 applies (weights), 0 elsewhere.
-    decay: Vec<f32>,
+    /// The flat buffer as consecutive runs, each with its L2 mask: 1 where L2 applies
+    /// (weights), 0 elsewhere (biases, and any gap between tensors).
+    runs: Vec<(std::ops::Range<usize>, f32)>,
+    /// Number of parameters.
+    len: usize,
     state: AdamState,
+}
+
+/// `mask` (one entry per parameter) as maximal runs of equal values.
+fn runs_of(mask: &[f32]) -> Vec<(std::ops::Range<usize>, f32)> {
+    let mut runs: Vec<(std::ops::Range<usize>, f32)> = Vec::new();
+    for (i, &d) in mask.iter().enumerate() {
+        match runs.last_mut() {
+            Some((r, v)) if *v == d => r.end = i + 1,
+            _ => runs.push((i..i + 1, d)),
+        }
+    }
+    runs
 }
 
 /// Scales `grads` (several buffers seen as one vector) so that their global L2 norm is at most
 /// `max_norm`; returns the norm before scaling. Non-finite norms are returned unscaled.
 pub fn clip_grad_norm(grads: &mut [&mut [f32]], max_norm: f32) -> f32 {
     let norm = grads.iter().map(|g| sum_sq(g)).sum::<f64>().sqrt() as f32;
-    if norm.is_finite() && norm > max_norm {
-        let k = max_norm / norm;
+    if let Some(k) = clip_factor(norm, max_norm) {
         grads
             .iter_mut()
             .for_each(|g| g.iter_mut().for_each(|x| *x *= k));
     }
     norm
+}
+
+/// The factor that brings a gradient of norm `norm` down to `max_norm`, if it is above it
+/// (none for a non-finite norm).
+fn clip_factor(norm: f32, max_norm: f32) -> Option<f32> {
+    (norm.is_finite() && norm > max_norm).then(|| max_norm / norm)
 }
 
 impl Adam {
@@ -126,7 +146,8 @@ impl Adam {
         let n = params.len();
         Ok(Self {
             config,
-            decay,
+            runs: runs_of(&decay),
+            len: n,
             state: AdamState {
                 t: 0,
                 m: vec![0.0; n],
@@ -153,10 +174,10 @@ impl Adam {
     /// Restores moments saved by [`Adam::state`].
     pub fn set_state(&mut self, state: AdamState) -> Result<(), NnError> {
         for (what, v) in [("Adam m", &state.m), ("Adam v", &state.v)] {
-            if v.len() != self.decay.len() {
+            if v.len() != self.len {
                 return Err(NnError::LengthMismatch {
                     what: what.into(),
-                    expected: self.decay.len(),
+                    expected: self.len,
                     found: v.len(),
                 });
             }
@@ -180,11 +201,16 @@ impl Adam {
         r
     }
 
-    /// One step on `params` with the loss gradient `grad` (consumed: clipped in place).
-    /// Returns the gradient norm before clipping. A non-finite gradient is refused with
-    /// [`NnError::NonFiniteGradient`] and nothing changes.
+    /// One step on `params` with the loss gradient `grad` (consumed: its contents are
+    /// unspecified afterwards). Returns the gradient norm before clipping. A non-finite
+    /// gradient is refused with [`NnError::NonFiniteGradient`] and nothing changes.
+    ///
+    /// Two passes over memory: the norm, then one fused pass that clips, adds L2 and moves
+    /// the moments and the parameters. It computes what clipping in place and then updating
+    /// would, bit for bit (the clip factor is the same f32 product, and 1 where there is no
+    /// clipping).
     pub fn step(&mut self, params: &mut Params, grad: &mut [f32]) -> Result<f32, NnError> {
-        let n = self.decay.len();
+        let n = self.len;
         if params.len() != n || grad.len() != n {
             return Err(NnError::LengthMismatch {
                 what: "Adam::step gradient/parameters".into(),
@@ -192,10 +218,12 @@ impl Adam {
                 found: grad.len().min(params.len()),
             });
         }
-        let norm = match self.config.grad_clip {
-            Some(c) => clip_grad_norm(&mut [grad], c),
-            None => sum_sq(grad).sqrt() as f32,
-        };
+        let norm = sum_sq(grad).sqrt() as f32;
+        let clip = self
+            .config
+            .grad_clip
+            .and_then(|c| clip_factor(norm, c))
+            .unwrap_or(1.0);
         if !norm.is_finite() {
             return Err(NnError::NonFiniteGradient {
                 what: format!("{n} parameters"),
@@ -210,22 +238,26 @@ impl Adam {
         let inv_sqrt_bc2 = (1.0 / bc2.sqrt()) as f32;
         let (b1, b2, eps, l2) = (c.beta1, c.beta2, c.eps, c.l2);
         let theta = params.as_mut_slice();
-        let k = AdamConsts {
-            b1,
-            b2,
-            eps,
-            l2,
-            step,
-            inv_sqrt_bc2,
-        };
-        adam_update(
-            theta,
-            grad,
-            &self.decay,
-            &mut self.state.m,
-            &mut self.state.v,
-            k,
-        );
+        let (m, v) = (&mut self.state.m, &mut self.state.v);
+        for (r, mask) in &self.runs {
+            let k = AdamConsts {
+                b1,
+                b2,
+                eps,
+                clip,
+                l2: l2 * mask,
+                step,
+                inv_sqrt_bc2,
+            };
+            let r = r.clone();
+            adam_update(
+                &mut theta[r.clone()],
+                &grad[r.clone()],
+                &mut m[r.clone()],
+                &mut v[r],
+                k,
+            );
+        }
         Ok(norm)
     }
 }
@@ -262,6 +294,9 @@ struct AdamConsts {
     b1: f32,
     b2: f32,
     eps: f32,
+    /// The clip factor (1 for none).
+    clip: f32,
+    /// λ on this run: λ·1 on weights, λ·0 on biases.
     l2: f32,
     /// lr / (1 − β₁ᵗ).
     step: f32,
@@ -271,25 +306,19 @@ struct AdamConsts {
 
 crate::kern::simd_fn! {
     /// The elementwise Adam update (see the module doc).
-    fn adam_update<'a>(theta: &'a mut [f32], grad: &'a [f32], decay: &'a [f32], m: &'a mut [f32], v: &'a mut [f32], k: AdamConsts) {
-        adam_rows(theta, grad, decay, m, v, k);
+    fn adam_update<'a>(theta: &'a mut [f32], grad: &'a [f32], m: &'a mut [f32], v: &'a mut [f32], k: AdamConsts) {
+        adam_rows(theta, grad, m, v, k);
     }
 }
 
 /// Body of [`adam_update`]; slices as separate arguments so the loop vectorises.
 #[inline(always)]
-fn adam_rows(
-    theta: &mut [f32],
-    grad: &[f32],
-    decay: &[f32],
-    m: &mut [f32],
-    v: &mut [f32],
-    k: AdamConsts,
-) {
+fn adam_rows(theta: &mut [f32], grad: &[f32], m: &mut [f32], v: &mut [f32], k: AdamConsts) {
     let n = theta.len();
-    let (grad, decay, m, v) = (&grad[..n], &decay[..n], &mut m[..n], &mut v[..n]);
+    let (grad, m, v) = (&grad[..n], &mut m[..n], &mut v[..n]);
     for i in 0..n {
-        let g = grad[i] + k.l2 * decay[i] * theta[i];
+        // (λ·mask)·θ as the former λ·mask[i]·θ[i]; g·clip as the former in-place clip.
+        let g = grad[i] * k.clip + k.l2 * theta[i];
         let mi = k.b1 * m[i] + (1.0 - k.b1) * g;
         let vi = k.b2 * v[i] + (1.0 - k.b2) * g * g;
         m[i] = mi;

@@ -151,3 +151,67 @@ fn invalid_config_names_the_field() {
         assert!(err.to_string().contains(field), "{err}");
     }
 }
+
+/// The two-pass definition: clip the gradient in place, then the elementwise update with L2
+/// on the weights (`mask` 1) only, all in f32 as the module doc writes it.
+fn two_pass_reference(
+    cfg: &AdamConfig,
+    theta: &mut [f32],
+    grad: &mut [f32],
+    mask: &[f32],
+    m: &mut [f32],
+    v: &mut [f32],
+    t: i32,
+) {
+    if let Some(c) = cfg.grad_clip {
+        clip_grad_norm(&mut [grad], c);
+    }
+    let step = (cfg.lr as f64 / (1.0 - (cfg.beta1 as f64).powi(t))) as f32;
+    let inv_sqrt_bc2 = (1.0 / (1.0 - (cfg.beta2 as f64).powi(t)).sqrt()) as f32;
+    for i in 0..theta.len() {
+        let g = grad[i] + cfg.l2 * mask[i] * theta[i];
+        m[i] = cfg.beta1 * m[i] + (1.0 - cfg.beta1) * g;
+        v[i] = cfg.beta2 * v[i] + (1.0 - cfg.beta2) * g * g;
+        theta[i] -= step * m[i] / (v[i].sqrt() * inv_sqrt_bc2 + cfg.eps);
+    }
+}
+
+#[test]
+fn the_fused_step_equals_clipping_then_updating_bit_for_bit() {
+    // Weights and biases interleaved, sizes that leave SIMD remainders.
+    let mut p = Params::new();
+    let mut x = 0.37f32;
+    let mut next = move || {
+        x = (x * 7.31 + 0.13).fract();
+        x - 0.5
+    };
+    for (i, len) in [67usize, 5, 130, 1, 33].into_iter().enumerate() {
+        p.add(&format!("t{i}"), &[len], i % 2 == 0, &mut next);
+    }
+    let mask: Vec<f32> = p
+        .specs()
+        .iter()
+        .flat_map(|s| std::iter::repeat_n(if s.decay { 1.0 } else { 0.0 }, s.len()))
+        .collect();
+    for clip in [None, Some(0.5), Some(1e6)] {
+        let cfg = AdamConfig {
+            lr: 3e-3,
+            l2: 0.05,
+            grad_clip: clip,
+            ..AdamConfig::default()
+        };
+        let mut fused = p.clone();
+        let mut opt = Adam::new(cfg.clone(), &fused).unwrap();
+        let mut theta = p.to_flat();
+        let (mut m, mut v) = (vec![0.0f32; theta.len()], vec![0.0f32; theta.len()]);
+        for t in 1..=4 {
+            let g: Vec<f32> = (0..theta.len()).map(|i| (i as f32 * 0.71 + t as f32).sin()).collect();
+            opt.step(&mut fused, &mut g.clone()).unwrap();
+            two_pass_reference(&cfg, &mut theta, &mut g.clone(), &mask, &mut m, &mut v, t);
+        }
+        let bits = |x: &[f32]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&fused.to_flat()), bits(&theta), "θ, clip {clip:?}");
+        assert_eq!(bits(&opt.state().m), bits(&m), "m, clip {clip:?}");
+        assert_eq!(bits(&opt.state().v), bits(&v), "v, clip {clip:?}");
+    }
+}
