@@ -205,7 +205,9 @@ fn the_fused_step_equals_clipping_then_updating_bit_for_bit() {
         let mut theta = p.to_flat();
         let (mut m, mut v) = (vec![0.0f32; theta.len()], vec![0.0f32; theta.len()]);
         for t in 1..=4 {
-            let g: Vec<f32> = (0..theta.len()).map(|i| (i as f32 * 0.71 + t as f32).sin()).collect();
+            let g: Vec<f32> = (0..theta.len())
+                .map(|i| (i as f32 * 0.71 + t as f32).sin())
+                .collect();
             opt.step(&mut fused, &mut g.clone()).unwrap();
             two_pass_reference(&cfg, &mut theta, &mut g.clone(), &mask, &mut m, &mut v, t);
         }
