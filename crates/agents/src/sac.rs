@@ -113,9 +113,9 @@ fn train_alpha(agent: &mut Agent, log_probs: &[Tensor], parts: &[Part]) -> Resul
         .reduce(|t, s| t + s)
         .unwrap_or(0.0)
         * parts[0].data.norm;
-    let mut grad = [-(mean_lp + entropy.target)];
+    let grad = [-(mean_lp + entropy.target)];
     if grad[0].is_finite() {
-        agent.opt_alpha.step(&mut agent.log_alpha, &mut grad)?;
+        agent.opt_alpha.step(&mut agent.log_alpha, &grad)?;
     }
     Ok(())
 }

@@ -341,7 +341,7 @@ pub(crate) fn train_critics(
     critics
         .par_iter_mut()
         .zip(opts)
-        .zip(&mut per_critic)
+        .zip(&per_critic)
         .try_for_each(|((c, opt), (grad, _))| opt.step(c.params_mut(), grad).map(drop))?;
     Ok((f64::from(loss), f64::from(q_mean)))
 }
@@ -353,14 +353,14 @@ pub(crate) fn step_actor(
     agent: &mut Agent,
     losses: Vec<chunks::ActorPart>,
 ) -> Result<(f32, Vec<Tensor>), AgentError> {
-    let (loss, mut grad, log_probs) = chunks::sum_actor_parts(losses)?;
+    let (loss, grad, log_probs) = chunks::sum_actor_parts(losses)?;
     if !loss.is_finite() {
         return Err(AgentError::NonFinite {
             what: "actor loss",
             update: agent.updates,
         });
     }
-    agent.opt_actor.step(agent.actor.params_mut(), &mut grad)?;
+    agent.opt_actor.step(agent.actor.params_mut(), &grad)?;
     Ok((loss, log_probs))
 }
 

@@ -193,23 +193,23 @@ impl Adam {
         params: &mut Params,
         grads: &mut crate::Gradients,
     ) -> Result<f32, NnError> {
-        let mut g = grads
+        let g = grads
             .take(params)
             .ok_or(NnError::NoGradient { len: params.len() })?;
-        let r = self.step(params, &mut g);
+        let r = self.step(params, &g);
         crate::pool::recycle(g);
         r
     }
 
-    /// One step on `params` with the loss gradient `grad` (consumed: its contents are
-    /// unspecified afterwards). Returns the gradient norm before clipping. A non-finite
-    /// gradient is refused with [`NnError::NonFiniteGradient`] and nothing changes.
+    /// One step on `params` with the loss gradient `grad`. Returns the gradient norm before
+    /// clipping. A non-finite gradient is refused with [`NnError::NonFiniteGradient`] and
+    /// nothing changes.
     ///
     /// Two passes over memory: the norm, then one fused pass that clips, adds L2 and moves
     /// the moments and the parameters. It computes what clipping in place and then updating
     /// would, bit for bit (the clip factor is the same f32 product, and 1 where there is no
     /// clipping).
-    pub fn step(&mut self, params: &mut Params, grad: &mut [f32]) -> Result<f32, NnError> {
+    pub fn step(&mut self, params: &mut Params, grad: &[f32]) -> Result<f32, NnError> {
         let n = self.len;
         if params.len() != n || grad.len() != n {
             return Err(NnError::LengthMismatch {

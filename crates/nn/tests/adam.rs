@@ -28,7 +28,7 @@ fn two_steps_match_hand_computation() {
 
     // Step 1: g = [0.1, −0.2, 0.3]; with L2, g' = [0.1 + 0.01·1, −0.2 + 0.01·(−2), 0.3]
     // = [0.11, −0.22, 0.3]. m̂ = g', v̂ = g'², so θ −= 0.1 · g'/(|g'| + 1e-8) ≈ 0.1·sign(g').
-    opt.step(&mut p, &mut [0.1, -0.2, 0.3]).unwrap();
+    opt.step(&mut p, &[0.1, -0.2, 0.3]).unwrap();
     let want1 = [
         1.0 - 0.1 * 0.11 / (0.11 + 1e-8),
         -2.0 + 0.1 * 0.22 / (0.22 + 1e-8),
@@ -57,7 +57,7 @@ fn two_steps_match_hand_computation() {
         let vh = v / (1.0 - 0.999f64.powi(2));
         want2[i] = theta1[i] - 0.1 * mh / (vh.sqrt() + 1e-8);
     }
-    opt.step(&mut p, &mut [-0.05, 0.1, 0.0]).unwrap();
+    opt.step(&mut p, &[-0.05, 0.1, 0.0]).unwrap();
     for (a, b) in p.as_slice().iter().zip(want2) {
         assert!((*a as f64 - b).abs() < 2e-6, "step 2: {a} vs {b}");
     }
@@ -89,7 +89,7 @@ fn clipping_happens_before_l2() {
     let mut opt = Adam::new(cfg, &p).unwrap();
     // g = [3, 0, −4], ‖g‖ = 5 → clipped [0.6, 0, −0.8]; then L2 on weights:
     // g' = [0.6 + 0.5·1, 0 + 0.5·(−2), −0.8] = [1.1, −1.0, −0.8]; m = (1 − β₁)g'.
-    let norm = opt.step(&mut p, &mut [3.0, 0.0, -4.0]).unwrap();
+    let norm = opt.step(&mut p, &[3.0, 0.0, -4.0]).unwrap();
     assert_eq!(norm, 5.0);
     let want = [0.11f32, -0.1, -0.08];
     for (a, b) in opt.state().m.iter().zip(want) {
@@ -106,11 +106,11 @@ fn non_finite_gradient_is_refused() {
     let mut p = params();
     let before = p.to_flat();
     let mut opt = Adam::new(AdamConfig::default(), &p).unwrap();
-    let err = opt.step(&mut p, &mut [f32::NAN, 0.0, 0.0]).unwrap_err();
+    let err = opt.step(&mut p, &[f32::NAN, 0.0, 0.0]).unwrap_err();
     assert!(matches!(err, NnError::NonFiniteGradient { .. }), "{err}");
     assert_eq!(p.to_flat(), before);
     assert_eq!(opt.state().t, 0);
-    let err = opt.step(&mut p, &mut [0.0, 0.0]).unwrap_err();
+    let err = opt.step(&mut p, &[0.0, 0.0]).unwrap_err();
     assert!(matches!(err, NnError::LengthMismatch { .. }), "{err}");
 }
 
@@ -208,7 +208,7 @@ fn the_fused_step_equals_clipping_then_updating_bit_for_bit() {
             let g: Vec<f32> = (0..theta.len())
                 .map(|i| (i as f32 * 0.71 + t as f32).sin())
                 .collect();
-            opt.step(&mut fused, &mut g.clone()).unwrap();
+            opt.step(&mut fused, &g).unwrap();
             two_pass_reference(&cfg, &mut theta, &mut g.clone(), &mask, &mut m, &mut v, t);
         }
         let bits = |x: &[f32]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
