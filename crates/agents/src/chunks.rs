@@ -163,6 +163,7 @@ pub(crate) fn sum_in_order(mut parts: impl Iterator<Item = Vec<f32>>) -> Vec<f32
         for (t, x) in total.iter_mut().zip(&g) {
             *t += x;
         }
+        esrl_nn::recycle(g);
     }
     total
 }

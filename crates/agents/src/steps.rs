@@ -343,6 +343,9 @@ pub(crate) fn train_critics(
         .zip(opts)
         .zip(&per_critic)
         .try_for_each(|((c, opt), (grad, _))| opt.step(c.params_mut(), grad).map(drop))?;
+    for (grad, _) in per_critic {
+        esrl_nn::recycle(grad);
+    }
     Ok((f64::from(loss), f64::from(q_mean)))
 }
 
@@ -361,6 +364,7 @@ pub(crate) fn step_actor(
         });
     }
     agent.opt_actor.step(agent.actor.params_mut(), &grad)?;
+    esrl_nn::recycle(grad);
     Ok((loss, log_probs))
 }
 

@@ -7,6 +7,19 @@
 //! the same sequence of multiply-adds whatever the number of blocks, so results do not depend
 //! on the thread count (tested bit for bit against the unsplit product in this module and on
 //! whole updates in `esrl-agents`).
+//!
+//! **Where faer packs.** faer 0.24 hands an f32 product of more than a few thousand
+//! multiply-adds to `private-gemm-x86`, which first turns the product around so that the
+//! result is column-major (for a row-major `dst = op(a)·op(b)` it computes `dstᵀ =
+//! op(b)ᵀ·op(a)ᵀ`) and then copies ("packs") its left operand into the kernel's layout
+//! whenever the result has more than 12 columns (`n > 3·nr`, `nr = 4`; `private-gemm-x86`
+//! 0.1.22, `gemm`). Here every result is row-major, so the left operand is `op(b)ᵀ`: in a
+//! layer's forward product and its input gradient, the weight matrix (64 K floats for a
+//! 256×256 layer), packed again for every product: about 9 % of a batch-64 SAC update
+//! (`results/speed`). No weight layout avoids it (the 12-column rule packs any layout);
+//! results stored column-major (activations feature-major) would make the batch's
+//! activations the packed operand instead, 4× smaller at batch 64. That changes the layout
+//! of every op and has not been tried.
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};

@@ -12,6 +12,8 @@
 //! the parameter set, so the graph (and its borrows) can be dropped before the optimiser
 //! mutates the weights.
 
+use std::ops::Range;
+
 use crate::params::Params;
 use crate::tensor::Tensor;
 
@@ -238,10 +240,10 @@ impl<'a> Graph<'a> {
             }
             last = last.max(v.0);
         }
-        let mut pgrads: Vec<Option<Vec<f32>>> = self
+        let mut pgrads: Vec<Option<ParamGrad>> = self
             .bindings
             .iter()
-            .map(|b| b.trainable.then(|| crate::pool::zeros(b.params.len())))
+            .map(|b| b.trainable.then(|| ParamGrad::new(b.params.len())))
             .collect();
         for i in (0..=last).rev() {
             let Some(dy) = grads[i].take() else { continue };
@@ -262,9 +264,14 @@ impl<'a> Graph<'a> {
             match &node.op {
                 Op::Leaf => {}
                 Op::Param { set, offset } => {
-                    if let Some(pg) = ctx.pgrad(*set) {
-                        for (g, d) in pg[*offset..*offset + dy.len()].iter_mut().zip(dy.data()) {
-                            *g += d;
+                    let r = *offset..*offset + dy.len();
+                    if let Some((pg, fresh)) = ctx.pgrad_fresh(*set, r.clone()) {
+                        if fresh {
+                            pg[r].copy_from_slice(dy.data());
+                        } else {
+                            for (g, d) in pg[r].iter_mut().zip(dy.data()) {
+                                *g += d;
+                            }
                         }
                     }
                 }
@@ -275,7 +282,7 @@ impl<'a> Graph<'a> {
             .bindings
             .iter()
             .zip(pgrads)
-            .filter_map(|(b, g)| g.map(|g| (b.params.id(), g)))
+            .filter_map(|(b, g)| g.map(|g| (b.params.id(), g.finish())))
             .collect();
         Gradients {
             params,
@@ -288,8 +295,58 @@ impl<'a> Graph<'a> {
 pub(crate) struct BackCtx<'g, 'a> {
     pub(crate) nodes: &'g [Node],
     pub(crate) grads: &'g mut [Option<Tensor>],
-    pub(crate) pgrads: &'g mut [Option<Vec<f32>>],
+    pub(crate) pgrads: &'g mut [Option<ParamGrad>],
     pub(crate) bindings: &'g [Binding<'a>],
+}
+
+/// The gradient of one trainable binding during a reverse pass. Its buffer is not zeroed up
+/// front: the first op to write a parameter range overwrites it, later ones add to it, and
+/// [`ParamGrad::finish`] zeroes what no op wrote. This spares a memset of every trainable
+/// set and the products' read of it, with the same numbers: `0 + x` is `x`.
+pub(crate) struct ParamGrad {
+    buf: Vec<f32>,
+    /// Ranges written so far; any two are equal or disjoint.
+    written: Vec<Range<usize>>,
+}
+
+impl ParamGrad {
+    fn new(len: usize) -> Self {
+        Self {
+            buf: crate::pool::dirty(len),
+            written: Vec::new(),
+        }
+    }
+
+    /// Marks `r` written and says whether this is its first write.
+    ///
+    /// # Panics
+    /// If `r` overlaps a range written before without being equal to it (ops claim whole
+    /// parameter tensors, so this is a programming error).
+    fn claim(&mut self, r: Range<usize>) -> bool {
+        if self.written.contains(&r) {
+            return false;
+        }
+        assert!(
+            self.written
+                .iter()
+                .all(|w| w.end <= r.start || r.end <= w.start),
+            "parameter gradient range {r:?} overlaps one written before"
+        );
+        self.written.push(r);
+        true
+    }
+
+    /// The gradient, zero where no op wrote.
+    fn finish(mut self) -> Vec<f32> {
+        self.written.sort_by_key(|r| r.start);
+        let mut at = 0;
+        for r in &self.written {
+            self.buf[at..r.start].fill(0.0);
+            at = r.end;
+        }
+        self.buf[at..].fill(0.0);
+        self.buf
+    }
 }
 
 impl<'g, 'a> BackCtx<'g, 'a> {
@@ -332,10 +389,31 @@ impl<'g, 'a> BackCtx<'g, 'a> {
         ))
     }
 
-    /// Parameter values and gradient accumulator of a binding (`None` when frozen).
+    /// The gradient buffer of a binding (`None` when frozen) and whether the parameter range
+    /// `r` is written for the first time: then the caller must overwrite every element of
+    /// `r` instead of accumulating, and must not touch the buffer outside `r`. `r` is a
+    /// whole parameter tensor (ranges claimed in one pass are equal or disjoint).
     #[inline]
-    pub(crate) fn pgrad(&mut self, set: usize) -> Option<&mut [f32]> {
-        self.pgrads[set].as_deref_mut()
+    pub(crate) fn pgrad_fresh(
+        &mut self,
+        set: usize,
+        r: Range<usize>,
+    ) -> Option<(&mut [f32], bool)> {
+        let g = self.pgrads[set].as_mut()?;
+        let fresh = g.claim(r);
+        Some((&mut g.buf, fresh))
+    }
+
+    /// The gradient buffer of a binding (`None` when frozen) for an op that accumulates into
+    /// the parameter ranges `rs` (whole tensors): each is zeroed on its first write.
+    pub(crate) fn pgrad_zeroed(&mut self, set: usize, rs: &[Range<usize>]) -> Option<&mut [f32]> {
+        let g = self.pgrads[set].as_mut()?;
+        for r in rs {
+            if g.claim(r.clone()) {
+                g.buf[r.clone()].fill(0.0);
+            }
+        }
+        Some(&mut g.buf)
     }
 
     /// Parameter values of a binding.
@@ -379,5 +457,62 @@ impl Gradients {
     /// Gradient with respect to a [`Graph::leaf`] (or `None` if no path reached it).
     pub fn var(&self, v: Var) -> Option<&Tensor> {
         self.vars.get(v.0).and_then(|g| g.as_ref())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Tensors large enough (≥ 4,096 floats) that their buffers are pooled.
+    const N: usize = 4096;
+
+    fn ramp(n: usize, scale: f32) -> Vec<f32> {
+        (0..n).map(|i| ((i % 97) as f32 - 48.0) * scale).collect()
+    }
+
+    #[test]
+    fn parameter_gradients_are_the_sum_of_their_uses_and_zero_where_unused() {
+        let mut p = Params::new();
+        p.add("a", &[N], false, || 0.5);
+        p.add("unused", &[N + 3], false, || 0.25);
+        p.add("b", &[N], false, || -1.0);
+        let (c1, c2, c3) = (ramp(N, 0.01), ramp(N, -0.03), ramp(N, 0.7));
+
+        // loss = Σ a ⊙ c1 + Σ a ⊙ c2 + Σ b ⊙ c3, `a` read through two parameter nodes.
+        let mut g = Graph::new();
+        let k1 = g.constant(Tensor::from_vec(1, N, c1.clone()));
+        let k2 = g.constant(Tensor::from_vec(1, N, c2.clone()));
+        let k3 = g.constant(Tensor::from_vec(1, N, c3.clone()));
+        let (a1, a2, b) = (g.param(&p, "a"), g.param(&p, "a"), g.param(&p, "b"));
+        let (t1, t2, t3) = (g.mul(a1, k1), g.mul(a2, k2), g.mul(b, k3));
+        let (s1, s2, s3) = (g.sum(t1), g.sum(t2), g.sum(t3));
+        let s12 = g.add(s1, s2);
+        let loss = g.add(s12, s3);
+        // The gradient buffer the pass takes from the pool is full of NaN: every element it
+        // returns must have been written or zeroed.
+        crate::pool::recycle(vec![f32::NAN; p.len()]);
+        let grads = g.backward(loss);
+        let d = grads.of(&p).unwrap();
+
+        let (da, rest) = d.split_at(N);
+        let (dunused, db) = rest.split_at(N + 3);
+        for i in 0..N {
+            assert_eq!(da[i], c1[i] + c2[i], "a[{i}]");
+            assert_eq!(db[i], c3[i], "b[{i}]");
+        }
+        assert!(
+            dunused.iter().all(|&x| x.to_bits() == 0),
+            "the unused tensor's gradient is not exactly +0"
+        );
+    }
+
+    #[test]
+    #[should_panic(expected = "overlaps")]
+    fn a_range_overlapping_one_written_before_is_refused() {
+        let mut g = ParamGrad::new(10);
+        assert!(g.claim(0..4));
+        assert!(!g.claim(0..4));
+        g.claim(2..6);
     }
 }

@@ -150,3 +150,10 @@ pub use ops::Act;
 pub use optim::{clip_grad_norm, Adam, AdamConfig, AdamState};
 pub use params::{ParamSpec, Params};
 pub use tensor::Tensor;
+
+/// Hands a large buffer that is no longer needed (a parameter gradient taken out of
+/// [`Gradients`] once the optimiser has used it) back to this thread's pool, so the next
+/// reverse pass reuses it instead of allocating and zeroing a new one.
+pub fn recycle(buf: Vec<f32>) {
+    pool::recycle(buf);
+}

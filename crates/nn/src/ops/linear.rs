@@ -134,21 +134,21 @@ kern::simd_fn! {
 }
 
 kern::simd_fn! {
-    /// d ← d ⊙ 1[y > 0].
-    fn relu_mask<'a>(d: &'a mut [f32], y: &'a [f32]) {
-        // A multiply rather than `if y > 0 { d } else { 0 }` (or a bit mask), which LLVM turns
-        // into masked stores, microcoded and slow on AMD cores. (A NaN in dy stays NaN.)
-        for (d, &y) in d.iter_mut().zip(y) {
-            *d *= if y > 0.0 { 1.0 } else { 0.0 };
+    /// dz ← dy ⊙ 1[y > 0].
+    fn relu_mask<'a>(dz: &'a mut [f32], dy: &'a [f32], y: &'a [f32]) {
+        // A multiply rather than `if y > 0 { dy } else { 0 }` (or a bit mask), which LLVM
+        // turns into masked stores, microcoded and slow on AMD cores. (A NaN in dy stays NaN.)
+        for ((z, &d), &y) in dz.iter_mut().zip(dy).zip(y) {
+            *z = d * if y > 0.0 { 1.0 } else { 0.0 };
         }
     }
 }
 
 kern::simd_fn! {
-    /// d ← d ⊙ (1 − y²).
-    fn tanh_grad<'a>(d: &'a mut [f32], y: &'a [f32]) {
-        for (d, &y) in d.iter_mut().zip(y) {
-            *d *= 1.0 - y * y;
+    /// dz ← dy ⊙ (1 − y²).
+    fn tanh_grad<'a>(dz: &'a mut [f32], dy: &'a [f32], y: &'a [f32]) {
+        for ((z, &d), &y) in dz.iter_mut().zip(dy).zip(y) {
+            *z = d * (1.0 - y * y);
         }
     }
 }
@@ -172,17 +172,18 @@ pub(crate) fn linear_backward(
     let (n, o) = dy.shape();
     let mut owned = Vec::new();
     if act != Act::None {
-        owned = crate::pool::copy(dy.data());
+        owned = crate::pool::dirty(dy.len());
         match act {
-            Act::Relu => relu_mask(&mut owned, y.data()),
-            Act::Tanh => tanh_grad(&mut owned, y.data()),
+            Act::Relu => relu_mask(&mut owned, dy.data(), y.data()),
+            Act::Tanh => tanh_grad(&mut owned, dy.data(), y.data()),
             Act::None => {}
         }
     }
     let dz: &[f32] = if act == Act::None { dy.data() } else { &owned };
     let p = ctx.pvals(set);
     let xvals: Vec<&Tensor> = xs.iter().map(|&x| ctx.val(x)).collect();
-    if let Some(pg) = ctx.pgrad(set) {
+    if let Some((pg, fresh)) = ctx.pgrad_fresh(set, w..w + o * in_dim) {
+        // The input blocks write disjoint column blocks of dW that cover it.
         let mut off = 0;
         for xv in &xvals {
             let wk = xv.cols();
@@ -198,9 +199,14 @@ pub(crate) fn linear_backward(
                 xv.data(),
                 wk,
                 Tr::N,
-                true,
+                !fresh,
             );
             off += wk;
+        }
+    }
+    if let Some((pg, fresh)) = ctx.pgrad_fresh(set, b..b + o) {
+        if fresh {
+            pg[b..b + o].fill(0.0);
         }
         col_sum_into(&mut pg[b..b + o], dz, n, o);
     }

@@ -318,7 +318,12 @@ pub(crate) fn lstm_backward(n: &LstmNode, y: &Tensor, dy: &Tensor, ctx: &mut Bac
             .for_each(|(a, b)| *a += b);
     }
     let xvals: Vec<&Tensor> = n.xs.iter().map(|&x| ctx.val(x)).collect();
-    if let Some(pg) = ctx.pgrad(n.set) {
+    let ranges = [
+        s.w_ih..s.w_ih + g4 * s.input,
+        s.w_hh..s.w_hh + g4 * h,
+        s.b..s.b + g4,
+    ];
+    if let Some(pg) = ctx.pgrad_zeroed(n.set, &ranges) {
         let mut off = 0;
         for xv in &xvals {
             let wk = xv.cols();
