@@ -600,13 +600,14 @@ impl TrainConfig {
 }
 
 /// The default command's time (`esrl train es-sac`, preset `walker`: until the first policy
-/// that finishes every check start) at `--threads 2` on an idle 2-core Intel Xeon: seed 1
-/// measured (1,823,530 env steps in 622 s, 2,930 steps/s; `results/speed`, "Time to walk of
-/// the default command"); the range and the median over the ten seeds of `results/strict`
-/// and `results/restart` follow from their env steps to the first walk (0.83–3.40 M, median
-/// 2.21 M; a seed that never walks spends 1 M + 4 M after a restart) at the 2,620–2,930 env
-/// steps/s measured for the recipe on torques.
-pub const TIME_WALKER: &str = "until the first walk: 5-22 min at --threads 2 on an idle 2-core machine (10.4 min measured on seed 1; median over ten seeds about 13 min, 9 of 10 walk), about 30 min when a run starts over and still finds no walk (5 M env steps)";
+/// that finishes every check start) at `--threads 2` on an idle 2-core Intel Xeon
+/// (`results/speed`). Over the twenty seeds of `results/strict`, `results/restart` and
+/// `results/holdout`, the env steps to the first walk are 0.75–3.40 M (19 of 20 walk) and the
+/// median lies between seeds 14 and 13 (2.47 and 2.49 M), both measured: 993 and 969 s. The
+/// range follows from the steps at the 2,490–2,930 env steps/s measured; the whole 4 M
+/// budget was measured on seed 1 (1,551 s, `--until budget`); a seed that never walks spends
+/// 1 M + 4 M after a restart (estimated at the same rate).
+pub const TIME_WALKER: &str = "until the first walk: 5-23 min at --threads 2 on an idle 2-core machine (median over twenty seeds about 16 min, measured on the two median seeds: 16.1 and 16.6 min; 19 of 20 walk); the whole 4 M env steps 26 min (measured on seed 1), about 32 min when a run starts over and still finds no walk (5 M env steps)";
 /// `--preset walking-torque`'s time (until the first policy at the walking bar) at
 /// `--threads 2` on an idle 2-core Intel Xeon, measured on
 /// seeds 4, 1 and 5 of `results/torque`'s seed study (`results/speed`, "Time to walk of the
