@@ -606,8 +606,8 @@ impl TrainConfig {
 /// median lies between seeds 14 and 13 (2.47 and 2.49 M), both measured: 993 and 969 s. The
 /// range follows from the steps at the 2,490–2,930 env steps/s measured; the whole 4 M
 /// budget was measured on seed 1 (1,551 s, `--until budget`); a seed that never walks spends
-/// 1 M + 4 M after a restart (estimated at the same rate).
-pub const TIME_WALKER: &str = "until the first walk: 5-23 min at --threads 2 on an idle 2-core machine (median over twenty seeds about 16 min, measured on the two median seeds: 16.1 and 16.6 min; 19 of 20 walk); the whole 4 M env steps 26 min (measured on seed 1), about 32 min when a run starts over and still finds no walk (5 M env steps)";
+/// 1 M + 4 M after a restart (seed 8, measured: 1,882 s).
+pub const TIME_WALKER: &str = "until the first walk: 5-23 min at --threads 2 on an idle 2-core machine (median over twenty seeds about 16 min, measured on the two median seeds: 16.1 and 16.6 min; 19 of 20 walk); the whole 4 M env steps 26 min (measured on seed 1), 31 min when a run starts over and still finds no walk (5 M env steps; measured on seed 8)";
 /// `--preset walking-torque`'s time (until the first policy at the walking bar) at
 /// `--threads 2` on an idle 2-core Intel Xeon, measured on
 /// seeds 4, 1 and 5 of `results/torque`'s seed study (`results/speed`, "Time to walk of the
