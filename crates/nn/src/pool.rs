@@ -19,9 +19,8 @@ thread_local! {
     static POOL: RefCell<Vec<Vec<f32>>> = const { RefCell::new(Vec::new()) };
 }
 
-/// Takes the smallest pooled buffer with capacity ≥ n, if any. With `filled`, a buffer that
-/// already holds ≥ n values comes first (it needs no zero fill to reach length n).
-fn take(n: usize, filled: bool) -> Option<Vec<f32>> {
+/// Takes the smallest pooled buffer with capacity ≥ n, if any.
+fn take(n: usize) -> Option<Vec<f32>> {
     if n < POOL_MIN {
         return None;
     }
@@ -31,7 +30,7 @@ fn take(n: usize, filled: bool) -> Option<Vec<f32>> {
             .iter()
             .enumerate()
             .filter(|(_, v)| v.capacity() >= n)
-            .min_by_key(|(_, v)| (filled && v.len() < n, v.capacity()))
+            .min_by_key(|(_, v)| v.capacity())
             .map(|(i, _)| i)?;
         Some(p.swap_remove(best))
     })
@@ -39,7 +38,7 @@ fn take(n: usize, filled: bool) -> Option<Vec<f32>> {
 
 /// A buffer of `n` zeros.
 pub(crate) fn zeros(n: usize) -> Vec<f32> {
-    match take(n, false) {
+    match take(n) {
         Some(mut v) => {
             v.clear();
             v.resize(n, 0.0);
@@ -52,7 +51,7 @@ pub(crate) fn zeros(n: usize) -> Vec<f32> {
 /// A buffer of length `n` with unspecified (finite or not) contents, for outputs that are
 /// entirely overwritten.
 pub(crate) fn dirty(n: usize) -> Vec<f32> {
-    match take(n, true) {
+    match take(n) {
         Some(mut v) => {
             if v.len() > n {
                 v.truncate(n);

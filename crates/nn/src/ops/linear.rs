@@ -204,11 +204,9 @@ pub(crate) fn linear_backward(
             off += wk;
         }
     }
-    if let Some((pg, fresh)) = ctx.pgrad_fresh(set, b..b + o) {
-        if fresh {
-            pg[b..b + o].fill(0.0);
-        }
-        col_sum_into(&mut pg[b..b + o], dz, n, o);
+    let bias = b..b + o;
+    if let Some(pg) = ctx.pgrad_zeroed(set, std::slice::from_ref(&bias)) {
+        col_sum_into(&mut pg[bias], dz, n, o);
     }
     let mut off = 0;
     for (&x, xv) in xs.iter().zip(&xvals) {
