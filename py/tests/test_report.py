@@ -260,15 +260,18 @@ def test_study_and_robustness_figures(tmp_path) -> None:
     check = {"starts": 4, "at_bar": False}
     (run / "checks.jsonl").write_text("\n".join(json.dumps(c) for c in [
         {**check, "env_steps": 1000, "finished": 0, "classes": {"fall": 3, "walk": 1}},
+        {**check, "env_steps": 3000, "starts": 1, "finished": 0, "stopped": True,
+         "classes": {"walk": 1}},
         {**check, "env_steps": 5000, "finished": 4, "at_bar": True,
          "classes": {"walk": 3, "shuffle": 1}}]) + "\n")
     s = check_series(run / "checks.jsonl")
-    np.testing.assert_array_equal(s["env_steps"], [1000, 5000])
-    np.testing.assert_array_equal(s["finished"], [0, 4])
-    np.testing.assert_array_equal(s["at_bar"], [False, True])
+    np.testing.assert_array_equal(s["env_steps"], [1000, 3000, 5000])
+    np.testing.assert_array_equal(s["finished"], [0, 0, 4])
+    np.testing.assert_array_equal(s["at_bar"], [False, False, True])
+    np.testing.assert_array_equal(s["stopped"], [False, True, False])
     assert list(s["classes"]) == ["walk", "shuffle", "fall"]
-    np.testing.assert_array_equal(s["classes"]["shuffle"], [0, 1])
-    np.testing.assert_array_equal(s["classes"]["fall"], [3, 0])
+    np.testing.assert_array_equal(s["classes"]["shuffle"], [0, 0, 1])
+    np.testing.assert_array_equal(s["classes"]["fall"], [3, 0, 0])
     files = study_figures(study, tmp_path / "out", dpi=40)
     assert [f.name for f in files] == ["study_intervals.png", "study_profiles.png",
                                        "study_checks.png"]

@@ -42,6 +42,21 @@
 //! every [`CheckConfig::every_steps`] environment steps, the policy of the latest row (so a
 //! walk that appears after an early high score is still seen).
 //!
+//! **Stopping early** ([`CheckConfig::stop_early`], off by default). Most checks are of
+//! policies far from the bar, and a policy that must finish every start is out of reach at
+//! its first start that does not. With `stop_early`, a check stops at the start, in start
+//! order, after which the bar can no longer be met on its `starts` (or, confirming, on all
+//! `starts + confirm_starts`): too many starts missed the line (in time), or too many were
+//! not classified `walk`. Such a check is `stopped`, below the bar, and its counts and means
+//! are over the starts it ran (the rank's shares too). It never changes whether a policy is
+//! at the bar, so the first walk, `--until walk` and the policy a run that walks keeps stay
+//! what a full check finds; only the ranking of policies below the bar sees fewer starts.
+//! Which starts a stopped check ran does not depend on the thread count: starts run in
+//! parallel, the ones past a start already known to end the check are skipped, and the
+//! record keeps the starts up to the one that put the bar out of reach. While `[restart]`
+//! may still start the run over, checks run in full (the rule reads their mean distance);
+//! [`Checker::check`]'s `may_stop` says when it no longer can.
+//!
 //! **Cost.** A check simulates up to `starts` whole episodes (24,000 steps for 10 walking
 //! starts of 60 s). It runs beside the next row on the run's thread pool (the training
 //! session joins the two), so on two threads it mostly takes the core the rollouts leave
@@ -64,7 +79,8 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
 /// How a run checks its policies against the walking bar (`[check]` in `config.toml`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -93,6 +109,10 @@ pub struct CheckConfig {
     /// episode.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_track_time: Option<f64>,
+    /// Stop a check once the bar is out of its reach (module docs, "Stopping early").
+    /// Default false: every start runs.
+    #[serde(skip_serializing_if = "is_false")]
+    pub stop_early: bool,
 }
 
 impl Default for CheckConfig {
@@ -105,6 +125,7 @@ impl Default for CheckConfig {
             walk_share: 0.5,
             confirm_starts: 0,
             max_track_time: None,
+            stop_early: false,
         }
     }
 }
@@ -181,8 +202,13 @@ pub struct CheckResult {
     pub track_time: Option<f64>,
     /// Whether the policy meets the walking bar.
     pub at_bar: bool,
-    /// Environment steps the check simulated.
+    /// Environment steps of the episodes the result counts (a stopped check's skipped and
+    /// discarded starts are not).
     pub check_steps: u64,
+    /// Whether the check stopped once the bar was out of reach ([`CheckConfig::stop_early`]);
+    /// its counts are then over the `starts` it ran. Absent from `checks.jsonl` when false.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub stopped: bool,
 }
 
 impl CheckResult {
@@ -226,12 +252,17 @@ impl CheckResult {
             String::new()
         };
         format!(
-            "{classes}; {}/{} finished, {} falls, {:.2} m/s{}{confirmed}",
+            "{classes}; {}/{} finished, {} falls, {:.2} m/s{}{confirmed}{}",
             self.finished,
             self.starts,
             self.falls,
             self.mean_forward_velocity,
-            if self.at_bar { " (at the bar)" } else { "" }
+            if self.at_bar { " (at the bar)" } else { "" },
+            if self.stopped {
+                " (stopped: the bar out of reach)"
+            } else {
+                ""
+            }
         )
     }
 }
@@ -263,19 +294,82 @@ impl Checker {
 
     /// Checks `agent`'s deterministic policy from every start (and, when it meets the bar
     /// and [`CheckConfig::confirm_starts`] asks, from the confirmation's), in parallel on the
-    /// calling rayon pool (the result does not depend on the thread count).
-    pub fn check(&self, agent: &Agent) -> Result<CheckResult> {
+    /// calling rayon pool (the result does not depend on the thread count). With
+    /// [`CheckConfig::stop_early`] and `may_stop` (the caller's word that nothing reads the
+    /// full check's distance: module docs, "Stopping early"), it stops once the bar is out
+    /// of reach.
+    pub fn check(&self, agent: &Agent, may_stop: bool) -> Result<CheckResult> {
         let (starts, confirm) = (self.config.starts, self.config.confirm_starts);
-        let run = |ks: std::ops::Range<usize>| -> Result<Vec<Start>> {
-            ks.into_par_iter().map(|k| self.episode(agent, k)).collect()
-        };
-        let mut episodes = run(0..starts)?;
-        let first = judge(&self.config, &episodes, 0);
+        let stop = self.config.stop_early && may_stop;
+        let mut episodes = Vec::new();
+        let stopped = self.run_starts(agent, 0..starts, &mut episodes, stop)?;
+        let first = judge(&self.config, &episodes, 0, stopped);
         if !first.at_bar || confirm == 0 {
             return Ok(first);
         }
-        episodes.extend(run(starts..starts + confirm)?);
-        Ok(judge(&self.config, &episodes, confirm))
+        let stopped = self.run_starts(agent, starts..starts + confirm, &mut episodes, stop)?;
+        Ok(judge(
+            &self.config,
+            &episodes,
+            episodes.len() - starts,
+            stopped,
+        ))
+    }
+
+    /// Runs starts `ks` in parallel and appends them to `episodes` (the earlier starts of the
+    /// same check), in start order. With `stop`, the starts after the one that puts the bar
+    /// out of reach on `ks.end` episodes are left out (skipped when not yet begun); returns
+    /// whether that happened.
+    fn run_starts(
+        &self,
+        agent: &Agent,
+        ks: std::ops::Range<usize>,
+        episodes: &mut Vec<Start>,
+        stop: bool,
+    ) -> Result<bool> {
+        if !stop {
+            let run: Result<Vec<Start>> =
+                ks.into_par_iter().map(|k| self.episode(agent, k)).collect();
+            episodes.extend(run?);
+            return Ok(false);
+        }
+        let reach = Reach::new(&self.config, ks.end, episodes);
+        // The last start that can still matter: a start past the first one known to put the
+        // bar out of reach is skipped (module docs). Misses seen so far, by kind.
+        let last = AtomicUsize::new(usize::MAX);
+        let seen = Mutex::new([Vec::new(), Vec::new()]);
+        let results: Vec<Option<Result<Start>>> = ks
+            .clone()
+            .into_par_iter()
+            .map(|k| {
+                if k > last.load(Ordering::Acquire) {
+                    return None;
+                }
+                let start = self.episode(agent, k);
+                if let Ok(start) = &start {
+                    let mut seen = seen.lock().unwrap_or_else(|e| e.into_inner());
+                    if let Some(end) = reach.known_end(&mut seen, ks.start, k, start) {
+                        last.fetch_min(end, Ordering::AcqRel);
+                    }
+                }
+                Some(start)
+            })
+            .collect();
+        // Every start up to the one that ends the check ran: a start is skipped only past a
+        // start known to end it, which is at or after the one that does.
+        let ran: Vec<Start> = results
+            .into_iter()
+            .map_while(|r| r)
+            .collect::<Result<_>>()?;
+        let end = reach.end(&ran);
+        if end.is_none() && ran.len() < ks.len() {
+            crate::bail!(
+                "a walking check skipped start {} before a start that ended it",
+                ks.start + ran.len()
+            );
+        }
+        episodes.extend(ran.into_iter().take(end.map_or(usize::MAX, |e| e + 1)));
+        Ok(end.is_some())
     }
 
     /// Start `k`: one deterministic episode, judged.
@@ -335,8 +429,13 @@ fn is_zero(n: &usize) -> bool {
     *n == 0
 }
 
-/// Judges a check's episodes by the bar of `config` (`confirm` of them confirming).
-fn judge(config: &CheckConfig, episodes: &[Start], confirm: usize) -> CheckResult {
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+/// Judges a check's episodes by the bar of `config` (`confirm` of them confirming;
+/// `stopped`: the check stopped once the bar was out of reach, so it is below it).
+fn judge(config: &CheckConfig, episodes: &[Start], confirm: usize, stopped: bool) -> CheckResult {
     let mut classes = BTreeMap::new();
     for e in episodes {
         *classes.entry(e.class).or_insert(0) += 1;
@@ -358,10 +457,100 @@ fn judge(config: &CheckConfig, episodes: &[Start], confirm: usize) -> CheckResul
         mean_forward_velocity: episodes.iter().map(|e| e.speed).sum::<f64>() / n,
         mean_distance: episodes.iter().map(|e| e.distance).sum::<f64>() / n,
         track_time: (!times.is_empty()).then(|| times.iter().sum::<f64>() / times.len() as f64),
-        at_bar: in_time as f64 >= config.finish_share * n - 1e-9
+        at_bar: !stopped
+            && in_time as f64 >= config.finish_share * n - 1e-9
             && walks as f64 > config.walk_share * n,
         check_steps: episodes.iter().map(|e| e.steps).sum(),
+        stopped,
         classes,
+    }
+}
+
+/// How far a check with stopping early is from losing the bar: the misses of each kind (a
+/// start that did not reach the line in time; one not classified `walk`) it can still take
+/// on its `n` episodes, after the earlier phase's.
+struct Reach {
+    /// More misses of each kind than this put the bar out of reach (may be negative: out of
+    /// reach at the first start).
+    spare: [i64; 2],
+    /// [`CheckConfig::max_track_time`].
+    limit: Option<f64>,
+}
+
+impl Reach {
+    /// The spare misses of a check judged on `n` episodes, `earlier` of them already run.
+    fn new(config: &CheckConfig, n: usize, earlier: &[Start]) -> Self {
+        let nf = n as f64;
+        // The fewest finishes and walks `judge` accepts on `n` episodes.
+        let finishes = (0..=n)
+            .find(|&k| k as f64 >= config.finish_share * nf - 1e-9)
+            .unwrap_or(n + 1);
+        let walks = (0..=n)
+            .find(|&k| k as f64 > config.walk_share * nf)
+            .unwrap_or(n + 1);
+        let mut reach = Self {
+            spare: [n as i64 - finishes as i64, n as i64 - walks as i64],
+            limit: config.max_track_time,
+        };
+        for start in earlier {
+            let missed = reach.missed(start);
+            for (s, hit) in reach.spare.iter_mut().zip(missed) {
+                *s -= i64::from(hit);
+            }
+        }
+        reach
+    }
+
+    /// Whether `start` missed the line (in time), and whether it is not a walk.
+    fn missed(&self, start: &Start) -> [bool; 2] {
+        let in_time = start
+            .track_time
+            .is_some_and(|t| self.limit.is_none_or(|limit| t <= limit));
+        [!in_time, start.class != GaitClass::Walk]
+    }
+
+    /// The start of `phase` (this phase's starts, in order) after which the bar is out of
+    /// reach, if it is: where a check stops.
+    fn end(&self, phase: &[Start]) -> Option<usize> {
+        let mut misses = [0i64; 2];
+        phase.iter().position(|start| {
+            for (m, hit) in misses.iter_mut().zip(self.missed(start)) {
+                *m += i64::from(hit);
+            }
+            misses.iter().zip(self.spare).any(|(&m, spare)| m > spare)
+        })
+    }
+
+    /// Records start `k`'s misses in `seen` (the misses so far of this phase's completed
+    /// starts, by kind, sorted) and returns the start at or after which the check surely
+    /// ends, once known: for a kind with `spare + 1` misses among the completed starts, the
+    /// latest of the first `spare + 1` (the check ends there or, if a start not yet done
+    /// misses too, earlier). `first` is the phase's first start.
+    fn known_end(
+        &self,
+        seen: &mut [Vec<usize>; 2],
+        first: usize,
+        k: usize,
+        start: &Start,
+    ) -> Option<usize> {
+        let missed = self.missed(start);
+        let mut end = None::<usize>;
+        for ((list, hit), spare) in seen.iter_mut().zip(missed).zip(self.spare) {
+            if hit {
+                let at = list.partition_point(|&i| i < k);
+                list.insert(at, k);
+            }
+            let need = (spare + 1).max(0) as usize;
+            let here = if need == 0 {
+                Some(first)
+            } else {
+                list.get(need - 1).copied()
+            };
+            if let Some(here) = here {
+                end = Some(end.map_or(here, |e| e.min(here)));
+            }
+        }
+        end
     }
 }
 
@@ -594,17 +783,17 @@ mod tests {
         };
         // 9 of 10 first starts finish: at the bar.
         let mut episodes: Vec<Start> = (0..10).map(|k| start(k != 3, k == 3)).collect();
-        let first = judge(&config, &episodes, 0);
+        let first = judge(&config, &episodes, 0, false);
         assert!(first.at_bar && first.finished == 9 && first.starts == 10);
         // 15 of 20 fresh ones: 24 of 30 in all, exactly 80 %: still at the bar.
         episodes.extend((0..20).map(|k| start(k >= 5, k < 5)));
-        let all = judge(&config, &episodes, 20);
+        let all = judge(&config, &episodes, 20, false);
         assert_eq!((all.starts, all.confirm_starts, all.finished), (30, 20, 24));
         assert_eq!(all.falls, 6);
         assert!(all.at_bar);
         // One more fall among the fresh ones: 23 of 30 is below 80 %.
         episodes[10 + 5] = start(false, true);
-        let below = judge(&config, &episodes, 20);
+        let below = judge(&config, &episodes, 20, false);
         assert_eq!(below.finished, 23);
         assert!(!below.at_bar);
         // Ranked by shares: the confirmed check at the bar above the one below; and an
@@ -616,6 +805,7 @@ mod tests {
                 .map(|k| start(k % 10 != 3, false))
                 .collect::<Vec<_>>(),
             20,
+            false,
         );
         assert_eq!(confirmed.finished, 27);
         assert!(confirmed.beats(&first), "same finish share, fewer falls");
@@ -630,18 +820,18 @@ mod tests {
                 ..start(true, false)
             })
             .collect();
-        let plain = judge(&CheckConfig::default(), &episodes, 0);
+        let plain = judge(&CheckConfig::default(), &episodes, 0, false);
         assert!(plain.at_bar && plain.finished == 10);
         let limit = |t: f64| CheckConfig {
             max_track_time: Some(t),
             ..CheckConfig::default()
         };
         // Within 50 s: 7 of 10, below 80 %; the count reported stays every finish.
-        let slow = judge(&limit(50.0), &episodes, 0);
+        let slow = judge(&limit(50.0), &episodes, 0, false);
         assert!(!slow.at_bar);
         assert_eq!(slow.finished, 10);
         // Within 55 s (inclusive): all 10.
-        assert!(judge(&limit(55.0), &episodes, 0).at_bar);
+        assert!(judge(&limit(55.0), &episodes, 0, false).at_bar);
         for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             assert!(limit(bad).validate().is_err(), "{bad}");
         }
@@ -658,7 +848,7 @@ mod tests {
                         .collect::<Vec<_>>()
                 })
             })
-            .map(|e| judge(&config, &e, 0))
+            .map(|e| judge(&config, &e, 0, false))
             .collect();
         for a in &results {
             for b in &results {
@@ -680,6 +870,94 @@ mod tests {
                     a.describe(),
                     b.describe()
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn a_check_stops_where_its_misses_put_the_bar_out_of_reach() {
+        // The default bar on 10: 8 finishes and 6 walks, so 2 and 4 misses to spare.
+        let config = CheckConfig::default();
+        let reach = Reach::new(&config, 10, &[]);
+        assert_eq!(reach.spare, [2, 4]);
+        let finishes =
+            |pattern: &[bool]| -> Vec<Start> { pattern.iter().map(|&f| start(f, false)).collect() };
+        // The third start that misses the line ends the check.
+        let e = finishes(&[
+            true, false, true, false, true, true, false, true, true, true,
+        ]);
+        assert_eq!(reach.end(&e), Some(6));
+        assert_eq!(reach.end(&e[..6]), None);
+        // Fallen starts are misses of both kinds: the third fall ends it too.
+        let falls: Vec<Start> = (0..10).map(|_| start(false, true)).collect();
+        assert_eq!(reach.end(&falls), Some(2));
+        // `walker`'s bar (all 10 finish, then 19 of 20): the first miss ends the first
+        // phase; confirming, after 10 finishes, the second miss.
+        let strict = CheckConfig {
+            finish_share: 0.95,
+            confirm_starts: 10,
+            ..CheckConfig::default()
+        };
+        assert_eq!(Reach::new(&strict, 10, &[]).end(&e), Some(1));
+        let first = finishes(&[true; 10]);
+        let confirming = Reach::new(&strict, 20, &first);
+        assert_eq!(confirming.spare, [1, 9]);
+        assert_eq!(confirming.end(&e), Some(3));
+        // A bar no count can meet (every episode a walk, more than all of them) ends the
+        // check at its first start.
+        let never = CheckConfig {
+            walk_share: 1.0,
+            ..CheckConfig::default()
+        };
+        assert_eq!(Reach::new(&never, 10, &[]).end(&first), Some(0));
+        // A time limit makes a late finish a miss.
+        let timed = CheckConfig {
+            max_track_time: Some(50.0),
+            ..strict
+        };
+        let late = Start {
+            track_time: Some(55.0),
+            ..start(true, false)
+        };
+        assert_eq!(Reach::new(&timed, 10, &[]).end(&[late]), Some(0));
+    }
+
+    #[test]
+    fn starts_are_skipped_only_past_the_start_that_ends_the_check() {
+        // Every pattern of 6 starts (finish or miss) under a bar with 2 misses to spare, each
+        // completed in several orders: the start known to end the check, at any moment, is
+        // never before the start that does end it, and once every start before that one is
+        // done, it is that one.
+        let config = CheckConfig {
+            starts: 6,
+            finish_share: 0.6,
+            walk_share: 0.0,
+            ..CheckConfig::default()
+        };
+        let reach = Reach::new(&config, 6, &[]);
+        assert_eq!(reach.spare, [2, 5]);
+        let orders: [[usize; 6]; 4] = [
+            [0, 1, 2, 3, 4, 5],
+            [5, 4, 3, 2, 1, 0],
+            [3, 0, 5, 1, 4, 2],
+            [1, 3, 5, 0, 2, 4],
+        ];
+        for bits in 0u32..64 {
+            let e: Vec<Start> = (0..6).map(|k| start((bits >> k) & 1 == 1, false)).collect();
+            let end = reach.end(&e);
+            for order in orders {
+                let mut seen = [Vec::new(), Vec::new()];
+                let mut known = None::<usize>;
+                for &k in &order {
+                    if let Some(at) = reach.known_end(&mut seen, 0, k, &e[k]) {
+                        known = Some(known.map_or(at, |x| x.min(at)));
+                    }
+                    if let Some(known) = known {
+                        let end = end.expect("a known end is an end");
+                        assert!(known >= end, "{bits:06b} {order:?}: {known} < {end}");
+                    }
+                }
+                assert_eq!(known, end, "{bits:06b} {order:?}");
             }
         }
     }

@@ -124,6 +124,9 @@ struct Due {
     env_steps: u64,
     curve: f64,
     trigger: Trigger,
+    /// Whether the check may stop once the bar is out of reach (nothing reads its full
+    /// distance any more: [`Training::restart_settled`]).
+    may_stop: bool,
 }
 
 /// A check done.
@@ -137,7 +140,7 @@ struct Checked {
 fn run_check(checker: Option<&Checker>, due: Due) -> Result<Checked> {
     let checker = checker.ok_or_else(|| Error::Msg("a check is due without a checker".into()))?;
     let t = Instant::now();
-    let result = checker.check(&due.agent)?;
+    let result = checker.check(&due.agent, due.may_stop)?;
     Ok(Checked {
         due,
         result,
@@ -534,7 +537,22 @@ impl<L: Learner> Training<L> {
             env_steps: steps,
             curve,
             trigger,
+            may_stop: self.restart_settled(),
         }))
+    }
+
+    /// Whether `[restart]` can no longer start this attempt over, whatever later checks
+    /// find: there is no rule, the attempt is the last it allows, or it has walked or has a
+    /// check past the rule's distance (both stay true). Until then a check runs every start,
+    /// since the rule reads its mean distance ([`crate::check`] module docs, "Stopping
+    /// early").
+    fn restart_settled(&self) -> bool {
+        let Some(rule) = &self.cfg.restart else {
+            return true;
+        };
+        self.attempt.earlier.len() >= rule.max
+            || self.first_walk().is_some()
+            || self.best_distance().is_some_and(|d| d >= rule.min_distance)
     }
 
     /// Logs a finished check to `checks.jsonl` and keeps its policy in `RUN/best/` if it

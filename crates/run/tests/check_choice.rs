@@ -9,6 +9,7 @@ use esrl_agents::{
 };
 use esrl_run::check::{CheckConfig, CheckRecord};
 use esrl_run::checkpoint::{BestInfo, BEST, BEST_INFO};
+use esrl_run::restart::RestartConfig;
 use esrl_run::training::CHECKS_FILE;
 use esrl_run::{build, AgentKind, EnvKind, Preset, TrainConfig, Training};
 use esrl_sim::MakeEnv;
@@ -110,7 +111,11 @@ fn config(check: bool) -> TrainConfig {
 
 /// Trains the two scripted rows into a fresh folder; returns `best.json` and the check log.
 fn train(check: bool) -> (BestInfo, Vec<CheckRecord>) {
-    let cfg = config(check);
+    train_with(config(check))
+}
+
+/// [`train`] with any configuration.
+fn train_with(cfg: TrainConfig) -> (BestInfo, Vec<CheckRecord>) {
     let envs = build::envs(cfg.env, &cfg.walk).unwrap();
     let agent = build::agent(&cfg, &envs).unwrap();
     let n = agent.genome_len();
@@ -164,4 +169,38 @@ fn without_a_check_the_higher_return_is_kept() {
     assert!(checks.is_empty());
     assert_eq!(best.generation, 1);
     assert_eq!(best.check, None);
+}
+
+/// Contract: with `check.stop_early`, a check stops at the start that puts the bar out of
+/// reach only once `[restart]` can no longer start the run over; until then every start runs,
+/// since the rule reads the checks' mean distance.
+#[test]
+fn checks_stop_early_only_once_the_restart_rule_is_settled() {
+    let checks = |restart: Option<RestartConfig>| {
+        let mut cfg = config(true);
+        if let Some(check) = &mut cfg.check {
+            check.stop_early = true;
+        }
+        cfg.restart = restart;
+        let (_, records) = train_with(cfg);
+        assert_eq!(records.len(), 2, "both rows set a new best curve value");
+        records
+            .into_iter()
+            .map(|r| (r.result.starts, r.result.stopped))
+            .collect::<Vec<_>>()
+    };
+    // No rule: neither policy reaches the line, so each check ends at its first start.
+    assert_eq!(checks(None), [(1, true), (1, true)]);
+    // A rule that may still fire (no check went 15 m): every start runs.
+    let open = RestartConfig {
+        at_steps: 1_000_000_000,
+        ..RestartConfig::default()
+    };
+    assert_eq!(checks(Some(open.clone())), [(4, false), (4, false)]);
+    // A rule that any check settles (0 m): the first check runs in full, the second stops.
+    let settled = RestartConfig {
+        min_distance: 0.0,
+        ..open
+    };
+    assert_eq!(checks(Some(settled)), [(4, false), (1, true)]);
 }

@@ -34,7 +34,7 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
         cfg.seed,
     );
 
-    let walk = checker.check(&walker).unwrap();
+    let walk = checker.check(&walker, false).unwrap();
     assert_eq!(
         (walk.starts, walk.confirm_starts),
         (4, 2),
@@ -52,13 +52,13 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
         cfg.walk.clone(),
         cfg.seed,
     )
-    .check(&walker)
+    .check(&walker, false)
     .unwrap();
     assert_eq!((unconfirmed.starts, unconfirmed.confirm_starts), (2, 0));
     assert!(unconfirmed.at_bar);
     assert!(walk.check_steps > unconfirmed.check_steps);
 
-    let stand = checker.check(&stander).unwrap();
+    let stand = checker.check(&stander, false).unwrap();
     assert_eq!(
         (stand.starts, stand.confirm_starts),
         (2, 0),
@@ -66,4 +66,78 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
         stand.describe()
     );
     assert!(!stand.at_bar && stand.finished == 0);
+}
+
+/// Contract: `check.stop_early` never changes a check that meets the bar, ends a check at
+/// the start that puts the bar out of reach, and runs the same starts at any thread count.
+#[test]
+fn stopping_early_keeps_the_bar_and_does_not_depend_on_the_threads() {
+    let dir = flagship();
+    let cfg = TrainConfig::load(&dir.join("config.toml")).unwrap();
+    let envs = build::envs(cfg.env, &cfg.walk).unwrap();
+    let mut walker = build::agent(&cfg, &envs).unwrap();
+    checkpoint::load_agent(&dir, &mut walker).unwrap();
+    let mut stander = walker.clone();
+    stander
+        .set_genome(&vec![0.0; stander.genome_len()])
+        .unwrap();
+    let checker = |config: CheckConfig| {
+        Checker::new(
+            config,
+            build::load_model(&cfg.walk).unwrap(),
+            cfg.walk.clone(),
+            cfg.seed,
+        )
+    };
+    let stopping = CheckConfig {
+        starts: 2,
+        confirm_starts: 2,
+        finish_share: 1.0,
+        stop_early: true,
+        ..CheckConfig::default()
+    };
+    // At the bar: the same result, stopping or not.
+    let walk = checker(stopping.clone()).check(&walker, true).unwrap();
+    assert!(walk.at_bar && !walk.stopped, "{}", walk.describe());
+    assert_eq!(
+        walk,
+        checker(stopping.clone()).check(&walker, false).unwrap()
+    );
+    // Standing still misses the line at once; without `may_stop` every start runs.
+    let stand = checker(stopping.clone()).check(&stander, true).unwrap();
+    assert_eq!(
+        (stand.starts, stand.stopped, stand.at_bar),
+        (1, true, false)
+    );
+    let full = checker(stopping.clone()).check(&stander, false).unwrap();
+    assert_eq!((full.starts, full.stopped), (2, false));
+
+    // Every start in time, with the limit at the walk's mean track time over 6 starts: the
+    // slower starts miss it (and any that falls), so the check stops at the first of them,
+    // and which starts ran is the same on 1, 2 and 3 threads.
+    let six = CheckConfig {
+        starts: 6,
+        confirm_starts: 0,
+        ..stopping
+    };
+    let full = checker(six.clone()).check(&walker, false).unwrap();
+    assert!(full.finished >= 2, "{}", full.describe());
+    let timed = CheckConfig {
+        max_track_time: full.track_time,
+        ..six
+    };
+    let on = |threads: usize| {
+        let pool = esrl_nn::subnormal::thread_pool(threads).unwrap();
+        pool.install(|| checker(timed.clone()).check(&walker, true).unwrap())
+    };
+    let one = on(1);
+    assert!(one.stopped && !one.at_bar, "{}", one.describe());
+    assert!(
+        one.starts > 1,
+        "start 0 in time, so the mix is tested: {}",
+        one.describe()
+    );
+    for threads in [2, 3] {
+        assert_eq!(on(threads), one, "{threads} threads");
+    }
 }

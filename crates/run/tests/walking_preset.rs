@@ -101,7 +101,8 @@ fn walking_torque_is_walking_on_torques_until_the_first_walk() {
 }
 
 /// The default preset is `walking-torque` with the stricter stop (all 10 check starts at
-/// the line, then 19 of 20) and `[restart]` at its defaults: those keys and nothing else on
+/// the line, then 19 of 20; checks stopped once out of reach) and `[restart]` at its
+/// defaults: those keys and nothing else on
 /// the walking env; on the pendulum (no check, so no restart) every preset of the recipe
 /// resolves alike.
 #[test]
@@ -119,6 +120,8 @@ fn the_default_is_walking_torque_with_a_stricter_stop_and_restarts() {
             [
                 "check.confirm_starts: 0 vs 10",
                 "check.finish_share: 0.8 vs 0.95",
+                // `stop_early = false` is left out of config.toml: "none".
+                "check.stop_early: none vs true",
                 "preset: \"walking-torque\" vs \"walker\"",
                 "restart: none vs { at_steps = 1000000, max = 2, min_distance = 15.0 }",
             ],

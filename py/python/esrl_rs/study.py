@@ -46,8 +46,10 @@ CLASS_COLORS = {"walk": "tab:green", "shuffle": "tab:olive", "run": "tab:blue", 
 
 def check_series(checks_jsonl: PathLike) -> Dict[str, Any]:
     """The checks of one run as arrays over training: ``env_steps``, ``starts``, ``finished``,
-    ``at_bar`` (bool) and ``classes`` (class → episodes per check, every class of any check,
-    zero where a check had none), in the order of the file."""
+    ``at_bar`` (bool), ``stopped`` (bool: the check stopped once the bar was out of reach,
+    ``check.stop_early``, so its counts are over the starts it ran) and ``classes`` (class →
+    episodes per check, every class of any check, zero where a check had none), in the order
+    of the file."""
     rows = [json.loads(line) for line in Path(checks_jsonl).read_text(encoding="utf-8").splitlines()
             if line.strip()]
     names = sorted({c for r in rows for c in r["classes"]},
@@ -57,6 +59,7 @@ def check_series(checks_jsonl: PathLike) -> Dict[str, Any]:
         "starts": np.array([r["starts"] for r in rows], dtype=float),
         "finished": np.array([r["finished"] for r in rows], dtype=float),
         "at_bar": np.array([bool(r["at_bar"]) for r in rows]),
+        "stopped": np.array([bool(r.get("stopped", False)) for r in rows]),
         "classes": {c: np.array([r["classes"].get(c, 0) for r in rows], dtype=float) for c in names},
     }
 
@@ -77,16 +80,23 @@ def checks_figure(study_dir: PathLike, out: PathLike, dpi: int = 150) -> Path:
                              sharey=True)
     for ax, run in zip(axes.flat, runs):
         s = check_series(run / "checks.jsonl")
-        x = s["env_steps"] / 1e6
-        # Shares of each check's starts: a confirmed check (check.confirm_starts) has more.
-        n = np.maximum(s["starts"], 1.0)
-        ax.stackplot(x, *(v / n for v in s["classes"].values()), step="post",
+        # Shares of each check's starts: a confirmed check (check.confirm_starts) has more. A
+        # stopped check's shares are of the few starts it ran: it is marked, not stacked.
+        full = ~s["stopped"]
+        x = s["env_steps"][full] / 1e6
+        n = np.maximum(s["starts"][full], 1.0)
+        ax.stackplot(x, *(v[full] / n for v in s["classes"].values()), step="post",
                      labels=list(s["classes"]),
                      colors=[CLASS_COLORS.get(c, "black") for c in s["classes"]], alpha=0.55)
-        ax.step(x, s["finished"] / n, where="post", color="black", lw=1.0, label="past 50 m")
+        ax.step(x, s["finished"][full] / n, where="post", color="black", lw=1.0,
+                label="past 50 m")
+        if s["stopped"].any():
+            xs = s["env_steps"][s["stopped"]] / 1e6
+            ax.plot(xs, np.full(xs.shape, 0.02), "|", color="black", ms=4,
+                    label="stopped check (below the bar)")
         if s["at_bar"].any():
-            ax.axvline(x[np.argmax(s["at_bar"])], color="black", ls=":", lw=1.0,
-                       label="first at the bar")
+            ax.axvline(s["env_steps"][np.argmax(s["at_bar"])] / 1e6, color="black", ls=":",
+                       lw=1.0, label="first at the bar")
         ax.set_title(run.name, fontsize=9)
         ax.set_ylim(0, 1)
         ax.set_xlabel("env steps (M)", fontsize=8)
