@@ -607,9 +607,10 @@ impl TrainConfig {
 /// median lies between seeds 14 and 13 (2.47 and 2.49 M), both measured with checks that stop
 /// early (`check.stop_early`): 876 and 873 s. The range follows from the steps at the
 /// 2,490–2,930 env steps/s measured; the whole 4 M budget was measured on seed 1 (1,551 s,
-/// `--until budget`); a seed that never walks spends 1 M + 4 M after a restart (seed 8,
-/// measured: 1,882 s); both before checks stopped early, which makes them shorter.
-pub const TIME_WALKER: &str = "until the first walk: 5-23 min at --threads 2 on an idle 2-core machine (median over twenty seeds about 14.6 min, measured on the two median seeds: 14.6 min each; 19 of 20 walk); the whole 4 M env steps at most 26 min (measured on seed 1), 31 min when a run starts over and still finds no walk (5 M env steps; measured on seed 8)";
+/// `--until budget`, before checks stopped early, which makes it shorter); a seed that never
+/// walks spends 1 M + 4 M after a restart (seed 8, measured with checks that stop early:
+/// 1,778 s; 1,882 s before).
+pub const TIME_WALKER: &str = "until the first walk: 5-23 min at --threads 2 on an idle 2-core machine (median over twenty seeds about 14.6 min, measured on the two median seeds: 14.6 min each; 19 of 20 walk); the whole 4 M env steps at most 26 min (measured on seed 1), 30 min when a run starts over and still finds no walk (5 M env steps; measured on seed 8)";
 /// `--preset walking-torque`'s time (until the first policy at the walking bar) at
 /// `--threads 2` on an idle 2-core Intel Xeon, measured on
 /// seeds 4, 1 and 5 of `results/torque`'s seed study (`results/speed`, "Time to walk of the
