@@ -3,6 +3,7 @@
 //! from its first 2 starts and is confirmed on 2 more; the standing pose (a zero actor) is
 //! below the bar and runs its 2 starts alone.
 
+use esrl_agents::Agent;
 use esrl_run::check::{CheckConfig, Checker};
 use esrl_run::{build, checkpoint, TrainConfig};
 use std::path::PathBuf;
@@ -11,8 +12,9 @@ fn flagship() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../results/walking/flagship")
 }
 
-#[test]
-fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
+/// The flagship's configuration, its walking agent, and the same agent with a zero actor
+/// (it holds the standing pose).
+fn walker_and_stander() -> (TrainConfig, Agent, Agent) {
     let dir = flagship();
     let cfg = TrainConfig::load(&dir.join("config.toml")).unwrap();
     let envs = build::envs(cfg.env, &cfg.walk).unwrap();
@@ -22,6 +24,12 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
     stander
         .set_genome(&vec![0.0; stander.genome_len()])
         .unwrap();
+    (cfg, walker, stander)
+}
+
+#[test]
+fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
+    let (cfg, walker, stander) = walker_and_stander();
     let config = CheckConfig {
         starts: 2,
         confirm_starts: 2,
@@ -72,15 +80,7 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
 /// the start that puts the bar out of reach, and runs the same starts at any thread count.
 #[test]
 fn stopping_early_keeps_the_bar_and_does_not_depend_on_the_threads() {
-    let dir = flagship();
-    let cfg = TrainConfig::load(&dir.join("config.toml")).unwrap();
-    let envs = build::envs(cfg.env, &cfg.walk).unwrap();
-    let mut walker = build::agent(&cfg, &envs).unwrap();
-    checkpoint::load_agent(&dir, &mut walker).unwrap();
-    let mut stander = walker.clone();
-    stander
-        .set_genome(&vec![0.0; stander.genome_len()])
-        .unwrap();
+    let (cfg, walker, stander) = walker_and_stander();
     let checker = |config: CheckConfig| {
         Checker::new(
             config,
