@@ -50,12 +50,15 @@
 //! not classified `walk`. Such a check is `stopped`, below the bar, and its counts and means
 //! are over the starts it ran (the rank's shares too). It never changes whether a policy is
 //! at the bar, so the first walk, `--until walk` and the policy a run that walks keeps stay
-//! what a full check finds; only the ranking of policies below the bar sees fewer starts.
-//! Which starts a stopped check ran does not depend on the thread count: starts run in
-//! parallel, the ones past a start already known to end the check are skipped, and the
-//! record keeps the starts up to the one that put the bar out of reach. While `[restart]`
-//! may still start the run over, checks run in full (the rule reads their mean distance);
-//! [`Checker::check`]'s `may_stop` says when it no longer can.
+//! what a full check finds. A policy is kept on its full record only: a check that stops
+//! with its starts so far ranking it above the kept policy (or with none kept yet) runs its
+//! remaining starts after all (it is `completed`), so `RUN/best/` never holds a policy ranked
+//! on the few starts of a stopped check, and a stopped check is one that its first starts
+//! already rank below the kept policy. Which starts a stopped check ran does not depend on
+//! the thread count: starts run in parallel, the ones past a start already known to end the
+//! check are skipped, and the record keeps the starts up to the one that put the bar out of
+//! reach. While `[restart]` may still start the run over, checks run in full (the rule reads
+//! their mean distance); [`Checker::check`]'s `may_stop` says when it no longer can.
 //!
 //! **Cost.** A check simulates up to `starts` whole episodes (24,000 steps for 10 walking
 //! starts of 60 s). It runs beside the next row on the run's thread pool (the training
@@ -209,6 +212,12 @@ pub struct CheckResult {
     /// its counts are then over the `starts` it ran. Absent from `checks.jsonl` when false.
     #[serde(default, skip_serializing_if = "is_false")]
     pub stopped: bool,
+    /// Whether the check stopped once the bar was out of reach but ranked above the kept
+    /// policy on the starts it had run, and so ran its remaining starts (module docs,
+    /// "Stopping early"); its counts are over every start. Absent from `checks.jsonl` when
+    /// false.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub completed: bool,
 }
 
 impl CheckResult {
@@ -297,23 +306,50 @@ impl Checker {
     /// calling rayon pool (the result does not depend on the thread count). With
     /// [`CheckConfig::stop_early`] and `may_stop` (the caller's word that nothing reads the
     /// full check's distance: module docs, "Stopping early"), it stops once the bar is out
-    /// of reach.
-    pub fn check(&self, agent: &Agent, may_stop: bool) -> Result<CheckResult> {
+    /// of reach, unless the starts it ran rank it above `kept` (the kept policy's check;
+    /// `None`: none kept yet), in which case it runs the rest and is `completed`.
+    pub fn check(
+        &self,
+        agent: &Agent,
+        may_stop: bool,
+        kept: Option<&CheckResult>,
+    ) -> Result<CheckResult> {
         let (starts, confirm) = (self.config.starts, self.config.confirm_starts);
         let stop = self.config.stop_early && may_stop;
         let mut episodes = Vec::new();
-        let stopped = self.run_starts(agent, 0..starts, &mut episodes, stop)?;
-        let first = judge(&self.config, &episodes, 0, stopped);
+        let first = self.run_phase(agent, 0..starts, &mut episodes, stop, kept)?;
         if !first.at_bar || confirm == 0 {
             return Ok(first);
         }
-        let stopped = self.run_starts(agent, starts..starts + confirm, &mut episodes, stop)?;
-        Ok(judge(
-            &self.config,
-            &episodes,
-            episodes.len() - starts,
-            stopped,
-        ))
+        self.run_phase(agent, starts..starts + confirm, &mut episodes, stop, kept)
+    }
+
+    /// Runs the phase `ks` of a check (its first starts, or the confirmation's) after the
+    /// earlier phase's `episodes`, and judges all of them; a phase that stops but ranks
+    /// above `kept` on the starts it ran runs the rest ([`Checker::check`]).
+    fn run_phase(
+        &self,
+        agent: &Agent,
+        ks: std::ops::Range<usize>,
+        episodes: &mut Vec<Start>,
+        stop: bool,
+        kept: Option<&CheckResult>,
+    ) -> Result<CheckResult> {
+        // The confirmation's episodes are those past the first `starts`.
+        let judged = |episodes: &[Start], stopped: bool| {
+            let confirming = episodes.len().saturating_sub(self.config.starts);
+            judge(&self.config, episodes, confirming, stopped)
+        };
+        let stopped = self.run_starts(agent, ks.clone(), episodes, stop)?;
+        let result = judged(episodes, stopped);
+        if !stopped || kept.is_some_and(|k| !result.beats(k)) {
+            return Ok(result);
+        }
+        self.run_starts(agent, episodes.len()..ks.end, episodes, false)?;
+        Ok(CheckResult {
+            completed: true,
+            ..judged(episodes, false)
+        })
     }
 
     /// Runs starts `ks` in parallel and appends them to `episodes` (the earlier starts of the
@@ -462,6 +498,7 @@ fn judge(config: &CheckConfig, episodes: &[Start], confirm: usize, stopped: bool
             && walks as f64 > config.walk_share * n,
         check_steps: episodes.iter().map(|e| e.steps).sum(),
         stopped,
+        completed: false,
         classes,
     }
 }

@@ -127,6 +127,10 @@ struct Due {
     /// Whether the check may stop once the bar is out of reach (nothing reads its full
     /// distance any more: [`Training::restart_settled`]).
     may_stop: bool,
+    /// The check of the policy `RUN/best/` holds when this one was due (the same when it
+    /// runs: checks are recorded in order). A check that stops but ranks above it runs in
+    /// full ([`crate::check`] module docs, "Stopping early").
+    kept: Option<crate::check::CheckResult>,
 }
 
 /// A check done.
@@ -140,7 +144,7 @@ struct Checked {
 fn run_check(checker: Option<&Checker>, due: Due) -> Result<Checked> {
     let checker = checker.ok_or_else(|| Error::Msg("a check is due without a checker".into()))?;
     let t = Instant::now();
-    let result = checker.check(&due.agent, due.may_stop)?;
+    let result = checker.check(&due.agent, due.may_stop, due.kept.as_ref())?;
     Ok(Checked {
         due,
         result,
@@ -538,6 +542,7 @@ impl<L: Learner> Training<L> {
             curve,
             trigger,
             may_stop: self.restart_settled(),
+            kept: self.kept_check().map(|k| k.result.clone()),
         }))
     }
 

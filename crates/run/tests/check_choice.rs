@@ -116,6 +116,12 @@ fn train(check: bool) -> (BestInfo, Vec<CheckRecord>) {
 
 /// [`train`] with any configuration.
 fn train_with(cfg: TrainConfig) -> (BestInfo, Vec<CheckRecord>) {
+    train_rows(cfg, false)
+}
+
+/// [`train_with`], the policy that falls first when `falls_first` (it then scores the lower
+/// curve value, so both rows still set a new best).
+fn train_rows(cfg: TrainConfig, falls_first: bool) -> (BestInfo, Vec<CheckRecord>) {
     let envs = build::envs(cfg.env, &cfg.walk).unwrap();
     let agent = build::agent(&cfg, &envs).unwrap();
     let n = agent.genome_len();
@@ -125,7 +131,11 @@ fn train_with(cfg: TrainConfig) -> (BestInfo, Vec<CheckRecord>) {
     let falls = vec![0.05f32; n];
     let learner = Scripted {
         inner: Trainer::new(agent, cfg.seed),
-        rows: vec![(1.0, stands), (5.0, falls)],
+        rows: if falls_first {
+            vec![(1.0, falls), (5.0, stands)]
+        } else {
+            vec![(1.0, stands), (5.0, falls)]
+        },
         done: 0,
     };
     let dir = tempfile::tempdir().unwrap();
@@ -171,36 +181,64 @@ fn without_a_check_the_higher_return_is_kept() {
     assert_eq!(best.check, None);
 }
 
+/// The walking preset's short configuration with `check.stop_early` and `restart`.
+fn stopping(restart: Option<RestartConfig>) -> TrainConfig {
+    let mut cfg = config(true);
+    if let Some(check) = &mut cfg.check {
+        check.stop_early = true;
+    }
+    cfg.restart = restart;
+    cfg
+}
+
+/// Each check's (starts, stopped, completed).
+fn shapes(records: &[CheckRecord]) -> Vec<(usize, bool, bool)> {
+    assert_eq!(records.len(), 2, "both rows set a new best curve value");
+    records
+        .iter()
+        .map(|r| (r.result.starts, r.result.stopped, r.result.completed))
+        .collect()
+}
+
 /// Contract: with `check.stop_early`, a check stops at the start that puts the bar out of
 /// reach only once `[restart]` can no longer start the run over; until then every start runs,
 /// since the rule reads the checks' mean distance.
 #[test]
 fn checks_stop_early_only_once_the_restart_rule_is_settled() {
-    let checks = |restart: Option<RestartConfig>| {
-        let mut cfg = config(true);
-        if let Some(check) = &mut cfg.check {
-            check.stop_early = true;
-        }
-        cfg.restart = restart;
-        let (_, records) = train_with(cfg);
-        assert_eq!(records.len(), 2, "both rows set a new best curve value");
-        records
-            .into_iter()
-            .map(|r| (r.result.starts, r.result.stopped))
-            .collect::<Vec<_>>()
-    };
-    // No rule: neither policy reaches the line, so each check ends at its first start.
-    assert_eq!(checks(None), [(1, true), (1, true)]);
+    let checks = |restart| shapes(&train_with(stopping(restart)).1);
+    // No rule: neither policy reaches the line. The first check, with nothing kept yet, runs
+    // in full after all; the second (it falls at its first start) ranks below the kept
+    // standing policy there and stops.
+    assert_eq!(checks(None), [(4, false, true), (1, true, false)]);
     // A rule that may still fire (no check went 15 m): every start runs.
     let open = RestartConfig {
         at_steps: 1_000_000_000,
         ..RestartConfig::default()
     };
-    assert_eq!(checks(Some(open.clone())), [(4, false), (4, false)]);
+    assert_eq!(
+        checks(Some(open.clone())),
+        [(4, false, false), (4, false, false)]
+    );
     // A rule that any check settles (0 m): the first check runs in full, the second stops.
     let settled = RestartConfig {
         min_distance: 0.0,
         ..open
     };
-    assert_eq!(checks(Some(settled)), [(4, false), (1, true)]);
+    assert_eq!(checks(Some(settled)), [(4, false, false), (1, true, false)]);
+}
+
+/// Contract: the kept policy is chosen on full records only. A check that stops with its
+/// starts so far ranking it above the kept policy runs its remaining starts before it can
+/// replace it.
+#[test]
+fn a_stopped_check_that_ranks_above_the_kept_policy_runs_in_full() {
+    let (best, records) = train_rows(stopping(None), true);
+    // The falling policy is checked first (in full: nothing is kept); standing still, which
+    // does not fall at its first start, ranks above it there, so its check runs every start
+    // and replaces it.
+    assert_eq!(shapes(&records), [(4, false, true), (4, false, true)]);
+    assert!(records[0].result.falls > records[1].result.falls);
+    assert!(records[0].kept && records[1].kept);
+    assert_eq!(best.generation, 1);
+    assert_eq!(best.check.as_ref(), Some(&records[1].result));
 }

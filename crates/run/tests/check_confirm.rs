@@ -4,7 +4,7 @@
 //! below the bar and runs its 2 starts alone.
 
 use esrl_agents::Agent;
-use esrl_run::check::{CheckConfig, Checker};
+use esrl_run::check::{CheckConfig, CheckResult, Checker};
 use esrl_run::{build, checkpoint, TrainConfig};
 use std::path::PathBuf;
 
@@ -42,7 +42,7 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
         cfg.seed,
     );
 
-    let walk = checker.check(&walker, false).unwrap();
+    let walk = checker.check(&walker, false, None).unwrap();
     assert_eq!(
         (walk.starts, walk.confirm_starts),
         (4, 2),
@@ -60,13 +60,13 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
         cfg.walk.clone(),
         cfg.seed,
     )
-    .check(&walker, false)
+    .check(&walker, false, None)
     .unwrap();
     assert_eq!((unconfirmed.starts, unconfirmed.confirm_starts), (2, 0));
     assert!(unconfirmed.at_bar);
     assert!(walk.check_steps > unconfirmed.check_steps);
 
-    let stand = checker.check(&stander, false).unwrap();
+    let stand = checker.check(&stander, false, None).unwrap();
     assert_eq!(
         (stand.starts, stand.confirm_starts),
         (2, 0),
@@ -77,7 +77,8 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
 }
 
 /// Contract: `check.stop_early` never changes a check that meets the bar, ends a check at
-/// the start that puts the bar out of reach, and runs the same starts at any thread count.
+/// the start that puts the bar out of reach unless its starts so far rank it above the kept
+/// policy (it then runs every start), and runs the same starts at any thread count.
 #[test]
 fn stopping_early_keeps_the_bar_and_does_not_depend_on_the_threads() {
     let (cfg, walker, stander) = walker_and_stander();
@@ -97,20 +98,30 @@ fn stopping_early_keeps_the_bar_and_does_not_depend_on_the_threads() {
         ..CheckConfig::default()
     };
     // At the bar: the same result, stopping or not.
-    let walk = checker(stopping.clone()).check(&walker, true).unwrap();
+    let walk = checker(stopping.clone())
+        .check(&walker, true, None)
+        .unwrap();
     assert!(walk.at_bar && !walk.stopped, "{}", walk.describe());
     assert_eq!(
         walk,
-        checker(stopping.clone()).check(&walker, false).unwrap()
+        checker(stopping.clone())
+            .check(&walker, false, None)
+            .unwrap()
     );
-    // Standing still misses the line at once; without `may_stop` every start runs.
-    let stand = checker(stopping.clone()).check(&stander, true).unwrap();
+    // Standing still misses the line at once, below the walk kept; without `may_stop`
+    // every start runs.
+    let kept = Some(&walk);
+    let stand = checker(stopping.clone())
+        .check(&stander, true, kept)
+        .unwrap();
     assert_eq!(
         (stand.starts, stand.stopped, stand.at_bar),
         (1, true, false)
     );
-    let full = checker(stopping.clone()).check(&stander, false).unwrap();
-    assert_eq!((full.starts, full.stopped), (2, false));
+    let full_stand = checker(stopping.clone())
+        .check(&stander, false, None)
+        .unwrap();
+    assert_eq!((full_stand.starts, full_stand.stopped), (2, false));
 
     // Every start in time, with the limit at the walk's mean track time over 6 starts: the
     // slower starts miss it (and any that falls), so the check stops at the first of them,
@@ -120,17 +131,17 @@ fn stopping_early_keeps_the_bar_and_does_not_depend_on_the_threads() {
         confirm_starts: 0,
         ..stopping
     };
-    let full = checker(six.clone()).check(&walker, false).unwrap();
+    let full = checker(six.clone()).check(&walker, false, None).unwrap();
     assert!(full.finished >= 2, "{}", full.describe());
     let timed = CheckConfig {
         max_track_time: full.track_time,
         ..six
     };
-    let on = |threads: usize| {
+    let on = |threads: usize, kept: Option<&CheckResult>| {
         let pool = esrl_nn::subnormal::thread_pool(threads).unwrap();
-        pool.install(|| checker(timed.clone()).check(&walker, true).unwrap())
+        pool.install(|| checker(timed.clone()).check(&walker, true, kept).unwrap())
     };
-    let one = on(1);
+    let one = on(1, kept);
     assert!(one.stopped && !one.at_bar, "{}", one.describe());
     assert!(
         one.starts > 1,
@@ -138,6 +149,24 @@ fn stopping_early_keeps_the_bar_and_does_not_depend_on_the_threads() {
         one.describe()
     );
     for threads in [2, 3] {
-        assert_eq!(on(threads), one, "{threads} threads");
+        assert_eq!(on(threads, kept), one, "{threads} threads");
+    }
+
+    // A check whose first starts rank it above the kept policy (standing still), or with
+    // none kept, runs every start after all: its record is the full check's.
+    let in_full = checker(timed.clone()).check(&walker, false, None).unwrap();
+    assert!(
+        !in_full.at_bar && in_full.starts == 6,
+        "{}",
+        in_full.describe()
+    );
+    let completed = CheckResult {
+        completed: true,
+        ..in_full
+    };
+    for kept in [None, Some(&full_stand)] {
+        for threads in [1, 2] {
+            assert_eq!(on(threads, kept), completed, "{threads} threads");
+        }
     }
 }
