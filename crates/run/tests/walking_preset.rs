@@ -139,3 +139,26 @@ fn the_default_is_walking_torque_with_a_stricter_stop_and_restarts() {
         assert_eq!(on(Preset::WalkingTorque), on(Preset::Walking), "{agent:?}");
     }
 }
+
+/// Contract: `results/clock-fast/fast40.toml`, the README's file for a walk within 40 s, is the
+/// default (`walker`) with its 0.8 s gait clock, speed paid up to 1.4 m/s and a stop at the
+/// line within 40 s, and changes nothing else.
+#[test]
+fn the_fast40_file_is_walker_with_a_faster_clock_a_higher_cap_and_a_stop_at_40_s() {
+    let file =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../results/clock-fast/fast40.toml");
+    let agent = AgentKind::EsSac;
+    let fast =
+        TrainConfig::resolve(agent, &options(Preset::Walker, Some(file), None), Some(0)).unwrap();
+    let mut walker =
+        TrainConfig::resolve(agent, &options(Preset::Walker, None, None), Some(0)).unwrap();
+    assert_ne!(fast, walker);
+    if let Some(clock) = &mut walker.walk.gait_clock {
+        clock.period = 0.8;
+    }
+    walker.walk.reward.forward_cap = Some(1.4);
+    if let Some(check) = &mut walker.check {
+        check.max_track_time = Some(40.0);
+    }
+    assert_eq!(fast, walker);
+}
