@@ -16,10 +16,11 @@
 //! 0.1.22, `gemm`). Here every result is row-major, so the left operand is `op(b)ᵀ`: in a
 //! layer's forward product and its input gradient, the weight matrix (64 K floats for a
 //! 256×256 layer), packed again for every product: about 9 % of a batch-64 SAC update
-//! (`results/speed`). No weight layout avoids it (the 12-column rule packs any layout);
-//! results stored column-major (activations feature-major) would make the batch's
-//! activations the packed operand instead, 4× smaller at batch 64. That changes the layout
-//! of every op and has not been tried.
+//! (`results/speed`). No weight layout avoids it (the 12-column rule packs any layout).
+//! A feed-forward stack therefore keeps its values feature-major (`ops::linear`'s docs):
+//! `yᵀ = W·xᵀ` is a row-major result whose column-major frame is `y = x·Wᵀ`, so the packed
+//! operand is the batch's activations, 4× smaller at batch 64. Each output element is the
+//! same multiply-adds in the same order either way (tested bit for bit in `layers`).
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, MatMut, MatRef, Par};

@@ -3,6 +3,7 @@
 use crate::error::NnError;
 use crate::graph::{Graph, Var};
 use crate::layers::{Linear, Lstm, LstmState, Mlp};
+use crate::ops::linear::Layout;
 use crate::ops::Act;
 use crate::params::Params;
 use crate::tensor::Tensor;
@@ -26,6 +27,12 @@ pub trait Module {
 /// Largest layer width or LSTM size accepted: far above any locomotion network (the paper's
 /// widest layer is 256), low enough that one layer's weights cannot exhaust memory by a typo.
 pub const MAX_WIDTH: usize = 16_384;
+
+/// A layer that reads a feature-major stack's output and writes (N, out).
+const FROM_FEATURE_MAJOR: Layout = Layout {
+    x_t: true,
+    y_t: false,
+};
 
 fn check_widths(field: &str, widths: &[usize]) -> Result<(), NnError> {
     for (k, &w) in widths.iter().enumerate() {
@@ -316,14 +323,26 @@ impl Actor {
         state: Option<&LstmState>,
     ) -> ActorOutput {
         let p = &self.params;
-        let mut h = self.trunk.forward(g, p, obs);
         let mut out_state = None;
-        if let Some(l) = &self.lstm {
-            let o = l.forward(g, p, h, batch, state);
-            h = o.h;
-            out_state = Some(o.state);
-        }
-        let heads = self.heads.forward(g, p, h, Act::None);
+        let feature_major = match self.lstm {
+            None => self.trunk.forward_multi_feature_major(g, p, &[obs]),
+            Some(_) => None,
+        };
+        let heads = match feature_major {
+            // Feed-forward: the trunk's values stay feature-major up to the heads.
+            Some(h) => self
+                .heads
+                .forward_in(g, p, &[h], Act::None, FROM_FEATURE_MAJOR),
+            None => {
+                let mut h = self.trunk.forward(g, p, obs);
+                if let Some(l) = &self.lstm {
+                    let o = l.forward(g, p, h, batch, state);
+                    h = o.h;
+                    out_state = Some(o.state);
+                }
+                self.heads.forward(g, p, h, Act::None)
+            }
+        };
         let mean = g.slice_cols(heads, 0, self.act_dim);
         let s = g.slice_cols(heads, self.act_dim, self.act_dim);
         let s = g.softplus(s);
@@ -604,6 +623,13 @@ impl Critic {
         // The two paths are joined without a copy: the next layer reads both blocks.
         let joined = [hs, ha];
         let mut xs: &[Var] = &joined;
+        if self.lstm.is_none() {
+            if let Some(h) = self.joint.forward_multi_feature_major(g, p, xs) {
+                // Feed-forward: the joint stack's values stay feature-major up to Q.
+                let q = self.q.forward_in(g, p, &[h], Act::None, FROM_FEATURE_MAJOR);
+                return CriticOutput { q, state: None };
+            }
+        }
         let h;
         if !self.joint.layers().is_empty() {
             h = [self.joint.forward_multi(g, p, xs)];
