@@ -440,18 +440,29 @@ fn transposed(t: &Tensor) -> Tensor {
 
 /// acc[j] += Σ_r m[j, r] for a row-major (acc.len(), n) matrix, each sum taken in the order
 /// of r, as [`col_sum_into`] takes it for the transpose (so both give the same bits). Eight
-/// rows at a time keep eight independent sums in flight.
+/// rows at a time, read in 8 × 8 tiles, keep eight independent sums in flight.
 pub(crate) fn row_sum_into(acc: &mut [f32], m: &[f32], n: usize) {
     const LANES: usize = 8;
-    for (a, rows) in acc.chunks_mut(LANES).zip(m.chunks(LANES * n)) {
-        let mut s = [0.0f32; LANES];
-        s[..a.len()].copy_from_slice(a);
-        for r in 0..n {
-            for (q, sq) in s.iter_mut().enumerate().take(a.len()) {
-                *sq += rows[q * n + r];
+    let whole = acc.len() / LANES * LANES;
+    let (head, tail) = acc.split_at_mut(whole);
+    let cols = n / LANES * LANES;
+    for (a, block) in head.chunks_exact_mut(LANES).zip(m.chunks_exact(LANES * n)) {
+        let rows: [&[f32]; LANES] = std::array::from_fn(|q| &block[q * n..(q + 1) * n]);
+        let mut s: [f32; LANES] = (&*a).try_into().expect("eight sums");
+        for c in (0..cols).step_by(LANES) {
+            let tile: [[f32; LANES]; LANES] =
+                std::array::from_fn(|q| rows[q][c..c + LANES].try_into().expect("eight values"));
+            for k in 0..LANES {
+                s = std::array::from_fn(|q| s[q] + tile[q][k]);
             }
         }
-        a.copy_from_slice(&s[..a.len()]);
+        for c in cols..n {
+            s = std::array::from_fn(|q| s[q] + rows[q][c]);
+        }
+        a.copy_from_slice(&s);
+    }
+    for (a, row) in tail.iter_mut().zip(m[whole * n..].chunks_exact(n)) {
+        *a = row.iter().fold(*a, |s, &v| s + v);
     }
 }
 
