@@ -140,16 +140,21 @@ fn the_default_is_walking_torque_with_a_stricter_stop_and_restarts() {
     }
 }
 
-/// Contract: `results/clock-fast/fast40.toml`, the README's file for a walk within 40 s, is the
-/// default (`walker`) with its 0.8 s gait clock, speed paid up to 1.4 m/s and a stop at the
-/// line within 40 s, and changes nothing else.
+/// Contract: `results/clock-fast/fast40.toml`, the file the screen's runs are written as, is
+/// the default (`walker`) with its 0.8 s gait clock, speed paid up to 1.4 m/s and a stop at
+/// the line within 40 s, and changes nothing else; the preset `walker-fast` is the same on
+/// the walk, and `walker` on the pendulum, for every agent.
 #[test]
 fn the_fast40_file_is_walker_with_a_faster_clock_a_higher_cap_and_a_stop_at_40_s() {
     let file =
         PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../results/clock-fast/fast40.toml");
     let agent = AgentKind::EsSac;
-    let fast =
-        TrainConfig::resolve(agent, &options(Preset::Walker, Some(file), None), Some(0)).unwrap();
+    let fast = TrainConfig::resolve(
+        agent,
+        &options(Preset::Walker, Some(file.clone()), None),
+        Some(0),
+    )
+    .unwrap();
     let mut walker =
         TrainConfig::resolve(agent, &options(Preset::Walker, None, None), Some(0)).unwrap();
     assert_ne!(fast, walker);
@@ -161,4 +166,22 @@ fn the_fast40_file_is_walker_with_a_faster_clock_a_higher_cap_and_a_stop_at_40_s
         check.max_track_time = Some(40.0);
     }
     assert_eq!(fast, walker);
+    for agent in AgentKind::ALL {
+        let on = |preset, file: Option<&PathBuf>| {
+            let o = options(preset, file.cloned(), None);
+            without_preset_name(&TrainConfig::resolve(agent, &o, Some(0)).unwrap())
+        };
+        assert_eq!(
+            on(Preset::WalkerFast, None),
+            on(Preset::Walker, Some(&file)),
+            "{agent:?}"
+        );
+        let pendulum =
+            |preset| without_preset_name(&TrainConfig::preset(agent, EnvKind::Pendulum, preset));
+        assert_eq!(
+            pendulum(Preset::WalkerFast),
+            pendulum(Preset::Walker),
+            "{agent:?}"
+        );
+    }
 }

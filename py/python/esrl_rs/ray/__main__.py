@@ -20,7 +20,7 @@ from typing import Any, Callable, Dict, List, Optional, TypeVar
 T = TypeVar("T")
 
 AGENTS = ["es-sac", "es-td3", "es-ddpg", "sac", "td3", "ddpg"]
-PRESETS = ["paper", "quick", "long", "walking", "walking-torque", "walker", "smoke"]
+PRESETS = ["paper", "quick", "long", "walking", "walking-torque", "walker", "walker-fast", "smoke"]
 ENVS = ["walk", "pendulum"]
 
 
