@@ -304,9 +304,9 @@ pub struct BenchArgs {
 pub enum BenchWhat {
     /// Control steps per second of the walking env on one core, random actions, resets included.
     Env {
-        /// Control steps to run.
-        #[arg(long, default_value_t = 20_000)]
-        steps: usize,
+        /// Control steps to run (at least 1).
+        #[arg(long, default_value_t = 20_000, value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+        steps: u64,
         /// Preset whose walking task is stepped (action mode, servo, gait clock); default
         /// the paper's task (torque actions), the one `mujoco_urdf.py` compares with.
         #[arg(long, value_enum)]

@@ -111,7 +111,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                 Some(p) => TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, *p).walk,
                 None => esrl_sim::WalkConfig::default(),
             };
-            let r = esrl_sim::bench::bench_walk(&walk, *steps, 0)?;
+            let r = esrl_sim::bench::bench_walk(&walk, *steps as usize, 0)?;
             let text = format!(
                 "walking env, one core: {:.0} control steps/s ({} steps in {:.2} s, {} episodes, \
                  {:.0}× real time); physics dt {} s × {} substeps, {} solver iterations",

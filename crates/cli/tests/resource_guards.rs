@@ -1,7 +1,7 @@
 //! Contract: settings that cannot fit or cannot end are refused before anything is
 //! allocated or written, within seconds, with a non-zero exit and a message naming the
-//! setting: a huge population or network, batch larger than the buffer, absurd budgets, a
-//! runaway URDF.
+//! setting: a huge population or network, batch larger than the buffer, absurd budgets (none,
+//! or one the hybrid loop's warm start fills), a runaway URDF.
 
 mod common;
 
@@ -67,6 +67,9 @@ fn impossible_budgets_are_refused() {
     );
     refused("", &["--generations", "1000000000000"], "generations");
     refused("", &["--steps", "0"], "max_env_steps = 0");
+    // Below the hybrid loop's warm start (1,000 random steps before the first generation).
+    refused("", &["--steps", "10"], "rl.warm_start = 1000");
+    refused("", &["--steps", "1000"], "rl.warm_start = 1000");
 }
 
 #[test]

@@ -566,8 +566,19 @@ impl TrainConfig {
                 bail!("updates_per_step = {r}: must be in (0, 64]");
             }
         }
-        if self.max_env_steps == Some(0) {
-            bail!("max_env_steps = 0 (--steps 0): the budget must allow at least one step");
+        match self.max_env_steps {
+            Some(0) => {
+                bail!("max_env_steps = 0 (--steps 0): the budget must allow at least one step")
+            }
+            // The hybrid loop takes its warm start before the first generation, whatever the
+            // budget: a budget it fills would end the run with no generation at all.
+            Some(s) if self.agent.is_hybrid() && s <= self.rl.warm_start as u64 => bail!(
+                "max_env_steps = {s} (--steps {s}): the hybrid loop takes rl.warm_start = {} \
+                 random env steps before its first generation, so the budget must be larger \
+                 (or rl.warm_start smaller)",
+                self.rl.warm_start
+            ),
+            _ => {}
         }
         if let Some(check) = &self.check {
             check.validate()?;
@@ -582,7 +593,7 @@ impl TrainConfig {
         if self.stop_at_walk && (self.check.is_none() || self.env != EnvKind::Walk) {
             bail!(
                 "stop_at_walk (--until walk) needs the walking check: a `[check]` table on the \
-                 walking task (the `walking` preset has one)"
+                 walking task (the default `walker` and the walking presets have one)"
             );
         }
         if let Some(restart) = &self.restart {
