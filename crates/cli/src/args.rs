@@ -349,9 +349,9 @@ pub enum BenchWhat {
     /// Wall time of an ES generation at 1 and N threads: its rollouts alone, one update, and
     /// whole generations (rollouts + training, pipelined) as `esrl train` runs them.
     Es {
-        /// Threads to compare with one.
-        #[arg(long, default_value_t = 2)]
-        threads: usize,
+        /// Threads to compare with one (2 to 1024).
+        #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u64).range(2..=1024))]
+        threads: u64,
         /// Preset whose population and networks are timed.
         #[arg(long, value_enum, default_value_t = Preset::Paper)]
         preset: Preset,

@@ -198,6 +198,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             preset,
             json,
         } => {
+            let threads = &(*threads as usize);
             let (t1, steps) = es_generation_s(*preset, 1)?;
             let (tn, _) = es_generation_s(*preset, *threads)?;
             let eff = t1 / (tn * *threads as f64);

@@ -2,7 +2,7 @@
 //! message and a non-zero exit, never a panic, and nothing already written is lost:
 //! `record`/`eval --out` never replace a device, a pipe, a link or an existing file (without
 //! `--force`); a URDF nested thousands of levels deep and `--config`/`--urdf` reading a
-//! device are refused at once; thread counts are bounded; a benchmark of zero steps is refused; a run folder is trained by one
+//! device are refused at once; thread counts are bounded; a benchmark of zero steps or threads is refused; a run folder is trained by one
 //! process at a time; `eval` uses the configuration a policy was trained with and refuses an
 //! edited one; a budget below what a run has done leaves its `config.toml` alone; a config
 //! file naming another agent, `--urdf` on the pendulum and duplicate foot links are errors;
@@ -147,6 +147,9 @@ fn a_benchmark_of_nothing_is_refused() {
     // `bench env --steps 0` printed "0 control steps/s" as if it had measured something.
     let err = fails(&["bench", "env", "--steps", "0"]);
     assert!(err.contains("--steps"), "{err}");
+    // `bench es --threads 0` compared one thread with "0" (efficiency inf %).
+    let err = fails(&["bench", "es", "--threads", "0"]);
+    assert!(err.contains("--threads"), "{err}");
 }
 
 #[test]
