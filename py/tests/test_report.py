@@ -293,3 +293,13 @@ def test_study_and_robustness_figures(tmp_path) -> None:
     (tmp_path / "plain.json").write_text(json.dumps({"run": "r"}))
     with pytest.raises(ValueError, match="no robustness card"):
         robustness_figure(tmp_path / "plain.json", tmp_path / "out")
+
+
+def test_an_out_that_is_a_file_is_refused_by_name(tmp_path: Path) -> None:
+    # It used to end with "[Errno 17] File exists".
+    taken = tmp_path / "taken.txt"
+    taken.write_text("keep me")
+    with pytest.raises(SystemExit) as e:
+        report.main([str(tmp_path), "--out", str(taken)])
+    assert e.value.code == 2
+    assert taken.read_text() == "keep me"

@@ -564,6 +564,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parser.parse_args(argv)
     if not args.runs and not args.gait and not args.study and not args.robustness:
         parser.error("give run folders, --gait PATH, --study DIR or --robustness EVAL_JSON")
+    if Path(args.out).exists() and not Path(args.out).is_dir():
+        parser.error(f"--out {args.out}: exists and is not a folder (the report is a folder "
+                     "of figures and tables)")
     try:
         if args.study or args.robustness:
             from .study import robustness_figure, study_figures
