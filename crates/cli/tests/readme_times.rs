@@ -1,7 +1,9 @@
 //! Contract: the times the start banner states come from one place
 //! (`TrainConfig::typical_time`), and the README's quick start states the same ones.
 
-use esrl_run::config::{TIME_PENDULUM, TIME_QUICK, TIME_WALKER, TIME_WALKING, TIME_WALKING_TORQUE};
+use esrl_run::config::{
+    TIME_PENDULUM, TIME_QUICK, TIME_WALKER, TIME_WALKER_FAST, TIME_WALKING, TIME_WALKING_TORQUE,
+};
 use esrl_run::{AgentKind, EnvKind, Preset, TrainConfig};
 
 #[test]
@@ -10,6 +12,7 @@ fn the_readme_states_the_banner_times() {
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
     for t in [
         TIME_WALKER,
+        TIME_WALKER_FAST,
         TIME_WALKING_TORQUE,
         TIME_WALKING,
         TIME_QUICK,
@@ -19,6 +22,8 @@ fn the_readme_states_the_banner_times() {
     }
     let default = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::default());
     assert_eq!(default.typical_time(), Some(TIME_WALKER));
+    let fast = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::WalkerFast);
+    assert_eq!(fast.typical_time(), Some(TIME_WALKER_FAST));
     let torque = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::WalkingTorque);
     assert_eq!(torque.typical_time(), Some(TIME_WALKING_TORQUE));
     let walking = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::Walking);
