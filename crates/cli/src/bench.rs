@@ -198,10 +198,10 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             preset,
             json,
         } => {
-            let threads = &(*threads as usize);
+            let threads = *threads as usize;
             let (t1, steps) = es_generation_s(*preset, 1)?;
-            let (tn, _) = es_generation_s(*preset, *threads)?;
-            let eff = t1 / (tn * *threads as f64);
+            let (tn, _) = es_generation_s(*preset, threads)?;
+            let eff = t1 / (tn * threads as f64);
             let cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, *preset);
             let arch = if cfg.network.recurrent() {
                 Arch::Lstm
@@ -211,12 +211,12 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             let chunks = cfg.rl.batch_chunks;
             let batch = cfg.rl.batch_size;
             let upd = update_ms(arch, 31, batch, 3, 1, chunks)?.ms_per_update;
-            let upd_n = update_ms(arch, 31, batch, 3, *threads, chunks)?.ms_per_update;
+            let upd_n = update_ms(arch, 31, batch, 3, threads, chunks)?.ms_per_update;
             // The inner updates of a generation that collected `steps` env steps.
             let cycles = build::hybrid_config(&cfg).inner_cycles_for(steps as usize);
             let train_s = upd * cycles as f64 / 1e3;
             let (g1, whole) = whole_generation_s(*preset, 1, None)?;
-            let (gn, _) = whole_generation_s(*preset, *threads, Some(whole))?;
+            let (gn, _) = whole_generation_s(*preset, threads, Some(whole))?;
             let r = json!({
                 "preset": format!("{preset:?}").to_lowercase(),
                 "population": cfg.es.population,
