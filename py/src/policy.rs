@@ -100,15 +100,22 @@ impl PolicyCore {
 
 #[pymethods]
 impl PolicyCore {
-    /// Loads a run folder (its newest complete checkpoint) or a checkpoint folder inside one;
-    /// `undisturbed`: on the run's task without its training-time disturbances
-    /// (`[walk.perturb]`, as `esrl eval --undisturbed`).
+    /// Loads a run folder (the policy it hands over: `RUN/best/` when it keeps one, as
+    /// `esrl eval RUN`; `last`: its newest complete checkpoint, as `esrl eval --last`), or a
+    /// checkpoint, `best/` or record `policy/` folder as given; `undisturbed`: on the run's
+    /// task without its training-time disturbances (`[walk.perturb]`, as `esrl eval
+    /// --undisturbed`).
     #[staticmethod]
-    #[pyo3(signature = (path, undisturbed=false))]
-    fn load(py: Python<'_>, path: PathBuf, undisturbed: bool) -> PyResult<Self> {
+    #[pyo3(signature = (path, undisturbed=false, last=false))]
+    fn load(py: Python<'_>, path: PathBuf, undisturbed: bool, last: bool) -> PyResult<Self> {
         check_exists(&path)?;
+        let pick = if last {
+            esrl_eval::Pick::Last
+        } else {
+            esrl_eval::Pick::Kept
+        };
         let mut loaded = py
-            .detach(|| esrl_eval::load_run(&path))
+            .detach(|| esrl_eval::load_run_pick(&path, pick))
             .map_err(run_error)?;
         if undisturbed {
             let mut walk = loaded.config.walk.clone();

@@ -62,15 +62,20 @@ def cli_train(esrl_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> Calla
 @pytest.fixture(scope="session")
 def cli_eval(esrl_bin: Path) -> Callable[..., Dict[str, Any]]:
     """Runs `esrl eval RUN --last --episodes K` (the run's last checkpoint, the policy
-    `esrl_rs.load_policy(RUN)` loads) and returns the RUN/eval.json it wrote."""
+    `esrl_rs.load_policy(RUN, last=True)` loads) and returns the RUN/eval.json it wrote;
+    `last=False`: `esrl eval RUN` (the kept policy, `load_policy(RUN)`'s), whose eval.json is
+    RUN/best/'s when the run keeps one."""
 
-    def evaluate(run: Path, episodes: int = 1) -> Dict[str, Any]:
-        cmd = [str(esrl_bin), "eval", str(run), "--last", "--episodes", str(episodes)]
+    def evaluate(run: Path, episodes: int = 1, last: bool = True) -> Dict[str, Any]:
+        cmd = [str(esrl_bin), "eval", str(run), "--episodes", str(episodes)]
+        cmd += ["--last"] if last else []
+        kept = not last and (run / "best").is_dir()
+        path = run / "best" / "eval.json" if kept else run / "eval.json"
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
-        if proc.returncode != 0 or not (run / "eval.json").is_file():
-            no_cli(f"`{' '.join(cmd)}` did not write eval.json (exit {proc.returncode}): "
+        if proc.returncode != 0 or not path.is_file():
+            no_cli(f"`{' '.join(cmd)}` did not write {path} (exit {proc.returncode}): "
                    f"{proc.stderr.strip()[-500:]}")
-        return json.loads((run / "eval.json").read_text(encoding="utf-8"))
+        return json.loads(path.read_text(encoding="utf-8"))
 
     return evaluate
 

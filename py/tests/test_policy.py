@@ -42,12 +42,13 @@ def test_policy_rollout_matches_a_python_loop(cli_train: Callable[..., Path]) ->
 def test_policy_matches_esrl_eval(cli_train: Callable[..., Path],
                                   cli_eval: Callable[..., dict], tmp_path: Path) -> None:
     import shutil
-    for args in (PENDULUM, WALK):
+    for args, last in ((PENDULUM, False), (WALK, False), (WALK, True)):
         run = shutil.copytree(cli_train("sac" if args is PENDULUM else "es-sac", *args),
-                              tmp_path / f"run-{len(args)}")
-        ev = cli_eval(run, 2)
-        mine = esrl_rs.load_policy(run).evaluate(episodes=2, seed=0)
-        loaded = esrl_rs.load_eval(run)
+                              tmp_path / f"run-{len(args)}-{last}")
+        ev = cli_eval(run, 2, last)
+        mine = esrl_rs.load_policy(run, last=last).evaluate(episodes=2, seed=0)
+        written = run / "best" if args is WALK and not last else run
+        loaded = esrl_rs.load_eval(written)
         assert mine["agent"] == ev["agent"] and mine["seed"] == ev["seed"] == 0
         assert mine["mean"]["return"] == ev["mean"]["return"]
         for theirs, ours, typed in zip(ev["episodes"], mine["episodes"], loaded["episodes"]):
@@ -90,6 +91,18 @@ def test_policy_folder_with_the_actor_alone(cli_train: Callable[..., Path],
     ours, theirs = alone.rollout(3), full.rollout(3)
     assert ours["return"] == theirs["return"] and ours["length"] == theirs["length"]
     assert ours["q0"] is None and theirs["q0"] is not None
+
+
+def test_a_run_folder_means_its_kept_policy(cli_train: Callable[..., Path]) -> None:
+    """Given a run folder, `load_policy` takes the policy the run hands over, `RUN/best/`,
+    as `esrl eval RUN` does; `last=True` its newest checkpoint, as `esrl eval --last`."""
+    run = cli_train("es-sac", *WALK)
+    kept, last = esrl_rs.load_policy(run), esrl_rs.load_policy(run, last=True)
+    assert Path(kept.checkpoint) == run / "best"
+    assert Path(last.checkpoint).name == "checkpoint"
+    ours, best = kept.rollout(1), esrl_rs.load_policy(run / "best").rollout(1)
+    assert ours["return"] == best["return"] and ours["length"] == best["length"]
+    np.testing.assert_array_equal(ours["trace"]["x"], best["trace"]["x"])
 
 
 def test_walk_policy(cli_train: Callable[..., Path]) -> None:

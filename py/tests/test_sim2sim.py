@@ -176,3 +176,14 @@ def test_a_policy_trained_under_disturbances_is_checked_on_the_plain_task() -> N
     assert r["esrl"]["speed"] == pytest.approx(g["mean_forward_velocity"])
     own = esrl_rs.load_policy(randomized).evaluate(1, 1000)["episodes"][0]["gait"]
     assert own["mean_forward_velocity"] != pytest.approx(g["mean_forward_velocity"])
+
+
+def test_a_run_folder_is_checked_on_its_kept_policy(cli_train, capsys) -> None:
+    """Given a run folder, sim2sim runs the policy `esrl eval RUN` takes (`RUN/best/`);
+    `--last` its newest checkpoint; the JSON names the folder the weights came from."""
+    run = cli_train("es-sac", "--preset", "smoke", "--seed", "2")
+    for extra, folder in (([], run / "best"), (["--last"], run / "checkpoint")):
+        capsys.readouterr()
+        assert main([str(run), "--episodes", "1", "--json", *extra]) == 0
+        result = json.loads(capsys.readouterr().out)
+        assert Path(result["checkpoint"]) == folder, extra

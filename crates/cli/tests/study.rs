@@ -328,3 +328,64 @@ episodes = 100000
     assert!(first.is_file());
     assert!(!out.join("records/long-s0").exists());
 }
+
+/// `{seed}` in an arm's `init` is the run's seed: each seed of a fine-tuning study starts from
+/// its own policy, and a missing one is named.
+#[test]
+fn an_arms_init_names_each_seeds_own_policy() {
+    let tmp = tempfile::tempdir().unwrap();
+    for seed in ["0", "1"] {
+        let src = tmp.path().join(format!("src-s{seed}"));
+        common::smoke("sac", &src, &["--episodes", "2", "--seed", seed]);
+    }
+    let study = tmp.path().join("own.toml");
+    let text = r#"
+seeds = [0, 1]
+[eval]
+episodes = 1
+[[arm]]
+name = "tuned"
+agent = "sac"
+preset = "smoke"
+episodes = 2
+set = { init = "src-s{seed}" }
+"#;
+    std::fs::write(&study, text).unwrap();
+    let out = tmp.path().join("out");
+    ok(&[
+        "study",
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    for seed in [0, 1] {
+        let record: toml::Table =
+            std::fs::read_to_string(out.join(format!("records/tuned-s{seed}/config.toml")))
+                .unwrap()
+                .parse()
+                .unwrap();
+        let init = record["init"].as_str().unwrap();
+        assert!(
+            init.ends_with(&format!("src-s{seed}")),
+            "seed {seed}: {init}"
+        );
+        let loaded = read_json(&out.join(format!("runs/tuned-s{seed}/init.json")));
+        assert!(
+            loaded["from"]
+                .as_str()
+                .unwrap()
+                .ends_with(&format!("src-s{seed}")),
+            "seed {seed}: {loaded}"
+        );
+    }
+    std::fs::write(&study, text.replace("[0, 1]", "[2]")).unwrap();
+    let err = fails(&[
+        "study",
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        tmp.path().join("missing").to_str().unwrap(),
+    ]);
+    assert!(err.contains("src-s2"), "{err}");
+}

@@ -70,10 +70,10 @@ pub enum Pick {
     Last,
 }
 
-/// Finds the run folder and the checkpoint folder for a path that is either (a run folder
-/// means its last checkpoint; [`locate_pick`] chooses).
+/// Finds the run folder and the policy folder of `path`; a run folder means the policy it
+/// hands over, as `esrl eval RUN` takes it ([`Pick::Kept`]; [`locate_pick`] chooses).
 pub fn locate(path: &Path) -> Result<(PathBuf, PathBuf)> {
-    locate_pick(path, Pick::Last)
+    locate_pick(path, Pick::Kept)
 }
 
 /// Finds the run folder and the policy folder of `path`: a checkpoint or `best/` folder as
@@ -137,10 +137,11 @@ pub fn locate_pick(path: &Path, pick: Pick) -> Result<(PathBuf, PathBuf)> {
     )
 }
 
-/// Loads the run's config and the checkpoint's weights (run or checkpoint folder; a run
-/// folder means its last checkpoint).
+/// Loads the run's config and the policy's weights (a run, checkpoint, `best/` or record
+/// `policy/` folder; a run folder means the policy it hands over, `RUN/best/` when it keeps
+/// one, as `esrl eval RUN` takes it: [`Pick::Kept`]; [`load_run_pick`] chooses).
 pub fn load_run(path: &Path) -> Result<LoadedRun> {
-    load_run_pick(path, Pick::Last)
+    load_run_pick(path, Pick::Kept)
 }
 
 /// Loads a policy ([`locate_pick`]) with the configuration it was trained with: the copy in

@@ -24,15 +24,18 @@ class Policy:
         self._core = core
 
     @classmethod
-    def load(cls, path: Union[str, "os.PathLike[str]"], undisturbed: bool = False) -> "Policy":
-        """Loads a run folder (its newest complete checkpoint), a checkpoint folder inside
-        one, or a policy folder that keeps the actor alone (a study record's ``policy/``:
+    def load(cls, path: Union[str, "os.PathLike[str]"], undisturbed: bool = False,
+             last: bool = False) -> "Policy":
+        """Loads a run folder (the policy it hands over, as ``esrl eval RUN``: its kept
+        policy ``RUN/best/`` when it has one, else its newest complete checkpoint; ``last``:
+        the newest checkpoint, as ``esrl eval --last``), a checkpoint or ``best/`` folder,
+        or a policy folder that keeps the actor alone (a study record's ``policy/``:
         ``actor.safetensors`` and its ``config.toml``; it has no critics, so :meth:`q0`
         raises ``ValueError`` there). ``undisturbed``: on the run's task without its
         training-time disturbances (``[walk.perturb]``; ``esrl eval --undisturbed``).
         Raises ``FileNotFoundError`` (no folder, no checkpoint) or ``ValueError`` (a
         config or checkpoint that cannot be used)."""
-        return cls(PolicyCore.load(os.fspath(path), bool(undisturbed)))
+        return cls(PolicyCore.load(os.fspath(path), bool(undisturbed), bool(last)))
 
     def __repr__(self) -> str:
         return f"Policy(agent={self.agent!r}, env={self.env!r}, checkpoint={self.checkpoint!r})"
@@ -111,6 +114,7 @@ class Policy:
         return episodes[0]
 
 
-def load_policy(path: Union[str, "os.PathLike[str]"], undisturbed: bool = False) -> Policy:
+def load_policy(path: Union[str, "os.PathLike[str]"], undisturbed: bool = False,
+                last: bool = False) -> Policy:
     """:meth:`Policy.load`."""
-    return Policy.load(path, undisturbed)
+    return Policy.load(path, undisturbed, last)

@@ -361,24 +361,25 @@ def _summary(gaits: List[Dict[str, Any]]) -> Dict[str, Any]:
 
 
 def cross_check(path: str, episodes: int = 10, seed: int = 0, cone: str = "pyramidal",
-                servo: str = "explicit") -> Dict[str, Any]:
-    """The policy in ``path`` (a run, checkpoint, ``best/`` or record ``policy/`` folder)
+                servo: str = "explicit", last: bool = False) -> Dict[str, Any]:
+    """The policy in ``path`` (a run folder's kept policy, or with ``last`` its newest
+    checkpoint, as ``esrl eval``; a checkpoint, ``best/`` or record ``policy/`` folder)
     from reset seeds ``seed … seed + episodes − 1`` in esrl (``Policy.evaluate``, the code
     of ``esrl eval``) and on MuJoCo (:class:`MujocoWalk` with ``cone`` and ``servo``): both
     engines' gait metrics (:func:`esrl_rs.metrics.gait_metrics`), summarised per engine and
     per episode."""
-    return cross_checks(path, episodes, seed, [(cone, servo)])[0]
+    return cross_checks(path, episodes, seed, [(cone, servo)], last)[0]
 
 
 def cross_checks(path: str, episodes: int, seed: int,
-                 settings: Sequence[Sequence[str]]) -> List[Dict[str, Any]]:
+                 settings: Sequence[Sequence[str]], last: bool = False) -> List[Dict[str, Any]]:
     """:func:`cross_check` under each ``(cone, servo)`` of ``settings``, esrl's episodes run
     once."""
     from .policy import load_policy
 
     # Both engines run the plain task: a policy trained under disturbances ([walk.perturb])
     # is cross-checked without them, as `esrl eval --undisturbed` evaluates it.
-    policy = load_policy(path, undisturbed=True)
+    policy = load_policy(path, undisturbed=True, last=last)
     if policy.env != "walk":
         raise ValueError(f"{path}: a {policy.env} run; sim2sim is for the walking task")
     walk = policy._core.walk_config
@@ -400,7 +401,8 @@ def cross_checks(path: str, episodes: int, seed: int,
         mj = [metrics.gait_metrics(env.episode(policy, seed + k), track_length=track)
               for k in range(episodes)]
         out.append({
-            "policy": os.fspath(path), "seed": seed, "episodes": episodes,
+            "policy": os.fspath(path), "checkpoint": policy.checkpoint, "seed": seed,
+            "episodes": episodes,
             "mujoco_settings": {"cone": cone, "servo": env.servo, "action": env.mode},
             "esrl": _summary(ours), "mujoco": _summary(mj),
             "per_episode": [{
@@ -445,8 +447,11 @@ def main(argv: Optional[List[str]] = None) -> int:
     ap = argparse.ArgumentParser(prog="python -m esrl_rs.sim2sim",
                                  description="Run an esrl walking policy in esrl and on MuJoCo "
                                  "from the same starts and compare the gait metrics.")
-    ap.add_argument("policy", nargs="+", help="a run folder, a checkpoint or best/ folder, or a "
-                    "record's policy/ folder (several: one table each)")
+    ap.add_argument("policy", nargs="+", help="a run folder (its kept policy, as esrl eval), a "
+                    "checkpoint or best/ folder, or a record's policy/ folder (several: one "
+                    "table each)")
+    ap.add_argument("--last", action="store_true",
+                    help="a run folder's newest checkpoint instead of its kept policy")
     ap.add_argument("--episodes", type=int, default=10)
     ap.add_argument("--seed", type=int, default=0, help="reset seed of the first episode")
     ap.add_argument("--cone", choices=CONES + ("all",), default="pyramidal",
@@ -473,7 +478,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     results: List[Dict[str, Any]] = []
     try:
         for p in a.policy:
-            results += cross_checks(p, a.episodes, a.seed, settings)
+            results += cross_checks(p, a.episodes, a.seed, settings, a.last)
     except (ValueError, OSError, _native.EsrlError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

@@ -27,6 +27,11 @@
 //! name = "fine-tuned"
 //! agent = "es-sac"
 //! set = { init = "walker/records/default-s4/policy" } # start from a policy (relative to this file)
+//!
+//! [[arm]]
+//! name = "own-walk"
+//! agent = "es-sac"
+//! set = { init = "sources/s{seed}" } # each seed from its own policy: {seed} is the run's seed
 //! ```
 //!
 //! ```text
@@ -271,9 +276,11 @@ impl Study {
                         .with_context(|| format!("arm `{}`: its `set` keys", arm.name))?;
                 }
                 // A policy to start from is named from the study file's folder, as its
-                // config files are.
-                if let Some(init) = cfg.init.as_mut().filter(|p| p.is_relative()) {
-                    let path = base.join(&*init);
+                // config files are; `{seed}` in its name is the run's seed.
+                if let Some(init) = cfg.init.as_mut() {
+                    let named =
+                        PathBuf::from(init.to_string_lossy().replace("{seed}", &seed.to_string()));
+                    let path = base.join(named);
                     *init = std::path::absolute(&path).unwrap_or(path);
                 }
                 runs.push((i, seed, cfg));
