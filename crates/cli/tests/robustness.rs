@@ -46,6 +46,7 @@ fn perturbed_evaluations_and_the_card() {
         ("friction", "KIND=VALUE"),
         ("friction=-1", "friction"),
         ("contact=0.5", "contact_frequency"),
+        ("slope=100", "in degrees, within ±45°"),
     ] {
         let err = fails(&["eval", r, "--perturb", bad]);
         assert!(err.contains(want), "{bad}: {err}");

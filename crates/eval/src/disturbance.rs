@@ -71,7 +71,7 @@ impl Disturbance {
             Ok(v) if f32::is_finite(v) => v,
             _ => bail!("--perturb {text}: `{value}` is not a number"),
         };
-        Ok(match kind.trim() {
+        let d = match kind.trim() {
             "push_sagittal" => Disturbance::PushSagittal(v),
             "push_lateral" => Disturbance::PushLateral(v),
             "friction" => Disturbance::Friction(v),
@@ -87,7 +87,19 @@ impl Disturbance {
                  push_lateral (m/s), friction (coefficient), mass, strength (scale), slope \
                  (degrees), obs_noise (SD), delay (control steps), contact (Hz)"
             ),
-        })
+        };
+        // Out of range: refused here, in the unit typed, before a policy is loaded.
+        if let Disturbance::Slope(deg) = d {
+            if deg.abs() >= 45.0 {
+                bail!("--perturb {text}: the slope is in degrees, within ±45° (exclusive)");
+            }
+        }
+        let mut walk = esrl_sim::WalkConfig::default();
+        d.apply(&mut walk);
+        if let Err(e) = walk.validate() {
+            bail!("--perturb {text}: {e}");
+        }
+        Ok(d)
     }
 
     /// Lays the disturbance over a walking configuration (the result is validated when the
@@ -173,5 +185,39 @@ mod tests {
         assert_eq!(walk.physics.friction, 0.4);
         // Other quantities keep their ranges.
         assert_eq!(walk.perturb.mass_range, Some([0.8, 1.2]));
+    }
+
+    #[test]
+    fn out_of_range_magnitudes_are_refused_in_the_unit_typed() {
+        let err = |text: &str| Disturbance::parse(text).unwrap_err().to_string();
+        let slope = err("slope=100");
+        assert!(
+            slope.contains("degrees") && slope.contains("±45°"),
+            "{slope}"
+        );
+        assert!(err("slope=-45").contains("±45°"));
+        assert_eq!(
+            Disturbance::parse("slope=-44").unwrap(),
+            Disturbance::Slope(-44.0)
+        );
+        for (text, field) in [
+            ("friction=-1", "physics.friction"),
+            ("mass=0", "physics.mass_scale"),
+            ("strength=0", "perturb.strength"),
+            ("push_lateral=100", "perturb.push_speed"),
+            ("obs_noise=-1", "perturb.obs_noise"),
+            ("contact=0", "physics.contact_frequency"),
+            ("delay=1000", "perturb.action_delay"),
+        ] {
+            let e = err(text);
+            assert!(
+                e.starts_with(&format!("--perturb {text}:")) && e.contains(field),
+                "{e}"
+            );
+        }
+        for d in crate::standard_set() {
+            let (v, _) = d.magnitude();
+            assert_eq!(Disturbance::parse(&format!("{}={v}", d.name())).unwrap(), d);
+        }
     }
 }
