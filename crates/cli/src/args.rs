@@ -53,7 +53,8 @@ pub struct TrainOptions {
     /// A URDF to use instead of the embedded humanoid.
     #[arg(long, value_name = "PATH")]
     pub urdf: Option<PathBuf>,
-    /// Worker threads for population rollouts (results do not depend on it) [default: all cores].
+    /// Worker threads for population rollouts and updates (results do not depend on it; 0: one
+    /// per core, as `threads = 0` in config.toml) [default: all cores].
     #[arg(long)]
     pub threads: Option<usize>,
     /// Generations for ES agents.
