@@ -244,6 +244,10 @@ def test_study_and_robustness_figures(tmp_path) -> None:
                                   [1.0, 2 / 3, 0.0])
     study = tmp_path / "study"
     study.mkdir()
+    with pytest.raises(ValueError, match="no report.json in this folder; `esrl study report"):
+        study_figures(study, tmp_path / "out")
+    with pytest.raises(ValueError, match="none: no such study folder"):
+        study_figures(tmp_path / "none", tmp_path / "out")
     interval = {"estimate": 0.5, "lo": 0.2, "hi": 0.8}
     (study / "report.json").write_text(json.dumps({
         "arms": [{"arm": "a", "runs": 2, "at_bar": 1, "rate": interval,

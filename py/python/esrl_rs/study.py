@@ -144,8 +144,16 @@ def _plt() -> Any:
 
 def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Path]:
     """The figures of a study folder (module docs) into ``out``, the checks figure when its
-    records have checks; returns their paths."""
-    report = json.loads((Path(study_dir) / "report.json").read_text(encoding="utf-8"))
+    records have checks; returns their paths. A folder without ``report.json`` raises
+    ``ValueError`` that says how to write it."""
+    path = Path(study_dir) / "report.json"
+    if not Path(study_dir).is_dir():
+        raise ValueError(f"{study_dir}: no such study folder")
+    if not path.is_file():
+        what = "study folder" if (Path(study_dir) / "study.toml").is_file() else "folder"
+        raise ValueError(f"{study_dir}: no report.json in this {what}; `esrl study report "
+                         f"{study_dir}` writes it from the records")
+    report = json.loads(path.read_text(encoding="utf-8"))
     arms = report["arms"]
     runs = report["runs"]
     plt = _plt()
