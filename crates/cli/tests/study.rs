@@ -258,6 +258,14 @@ fn a_study_folder_holds_one_study_and_bad_files_are_named() {
             "seeds = 2\n[[arm]]\nname = \"a\"\nagent = \"sac\"\nset = { rl = { gamma = 7.0 } }\n",
             "gamma",
         ),
+        (
+            "seeds = 2\n[[arm]]\nname = \"a\"\nagent = \"sac\"\nseeds = [3, 3]\n",
+            "arm `a`: seeds: a seed is listed twice",
+        ),
+        (
+            "seeds = 2\n[[arm]]\nname = \"a\"\nagent = \"sac\"\nseeds = []\n",
+            "arm `a`: seeds: no seed",
+        ),
     ] {
         std::fs::write(&bad, text).unwrap();
         let err = fails(&[
@@ -388,4 +396,57 @@ set = { init = "src-s{seed}" }
         tmp.path().join("missing").to_str().unwrap(),
     ]);
     assert!(err.contains("src-s2"), "{err}");
+}
+
+/// An arm may run seeds of its own instead of the study's: its runs are named by them and
+/// the report says how many each arm has.
+#[test]
+fn an_arm_may_have_seeds_of_its_own() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = tmp.path().join("own.toml");
+    std::fs::write(
+        &study,
+        r#"
+seeds = 2
+[eval]
+episodes = 1
+[[arm]]
+name = "all"
+agent = "sac"
+preset = "smoke"
+episodes = 2
+[[arm]]
+name = "few"
+agent = "sac"
+preset = "smoke"
+episodes = 2
+seeds = [5]
+"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    ok(&[
+        "study",
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let mut names: Vec<String> = std::fs::read_dir(out.join("records"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["all-s0", "all-s1", "few-s5"]);
+    let few: toml::Table = std::fs::read_to_string(out.join("records/few-s5/config.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert_eq!(few["seed"].as_integer(), Some(5));
+    ok(&["study", "report", out.to_str().unwrap()]);
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains("2 arm(s), seeds per arm (all 2, few 1); 3 of 3 runs recorded"),
+        "{report}"
+    );
 }

@@ -22,6 +22,7 @@
 //! config = "overlays/mirror.toml" # a file laid over the preset (relative to this file)
 //! set = { rl = { mirror = true } } # or keys inline
 //! steps = 2000000                 # budget: steps, generations, episodes
+//! seeds = [3, 4]                  # this arm's own seeds (default: the study's)
 //!
 //! [[arm]]
 //! name = "fine-tuned"
@@ -103,6 +104,21 @@ impl Seeds {
             Seeds::List(v) => v.clone(),
         }
     }
+
+    /// At least one seed, none twice (`what` names them in the error).
+    fn check(&self, what: &str) -> Result<()> {
+        let seeds = self.list();
+        if seeds.is_empty() {
+            bail!("{what}: no seed");
+        }
+        let mut sorted = seeds.clone();
+        sorted.sort_unstable();
+        sorted.dedup();
+        if sorted.len() != seeds.len() {
+            bail!("{what}: a seed is listed twice");
+        }
+        Ok(())
+    }
 }
 
 /// Which policy a run hands over.
@@ -174,6 +190,16 @@ pub struct Arm {
     /// Episodes (plain agents).
     #[serde(default)]
     pub episodes: Option<usize>,
+    /// This arm's seeds, when not the study's (a count or a list).
+    #[serde(default)]
+    pub seeds: Option<Seeds>,
+}
+
+impl Arm {
+    /// The arm's seeds: its own, else the study's.
+    fn seeds<'a>(&'a self, study: &'a Seeds) -> &'a Seeds {
+        self.seeds.as_ref().unwrap_or(study)
+    }
 }
 
 /// A study read from its file, with every run's configuration resolved.
@@ -207,16 +233,7 @@ impl Study {
         if file.arms.is_empty() {
             bail!("the study has no [[arm]]");
         }
-        let seeds = file.seeds.list();
-        if seeds.is_empty() {
-            bail!("seeds: the study has no seed");
-        }
-        let mut sorted = seeds.clone();
-        sorted.sort_unstable();
-        sorted.dedup();
-        if sorted.len() != seeds.len() {
-            bail!("seeds: a seed is listed twice");
-        }
+        file.seeds.check("seeds")?;
         if file.eval.episodes == 0 {
             bail!("eval.episodes = 0: evaluate at least one episode");
         }
@@ -237,6 +254,9 @@ impl Study {
                 bail!("arm `{}` is listed twice", arm.name);
             }
             names.push(&arm.name);
+            if let Some(seeds) = &arm.seeds {
+                seeds.check(&format!("arm `{}`: seeds", arm.name))?;
+            }
             for key in ["agent", "seed", "preset"] {
                 if arm.set.contains_key(key) {
                     bail!(
@@ -254,10 +274,9 @@ impl Study {
     }
 
     fn resolve(&mut self, base: &Path) -> Result<()> {
-        let seeds = self.file.seeds.list();
         let mut runs = Vec::new();
         for (i, arm) in self.file.arms.iter().enumerate() {
-            for &seed in &seeds {
+            for seed in arm.seeds(&self.file.seeds).list() {
                 let overrides = Overrides {
                     preset: arm.preset.unwrap_or_default(),
                     config: arm.config.as_ref().map(|c| base.join(c)),

@@ -205,9 +205,30 @@ fn load_records(dir: &Path, study: &Study) -> Result<Vec<Record>> {
 
 /// The title and what the numbers are.
 fn heading(dir: &Path, study: &Study, recorded: usize) -> String {
-    let planned = study.file.seeds.list().len();
+    let own = study.file.arms.iter().any(|a| a.seeds.is_some());
+    let shape = if own {
+        // Arms with seeds of their own: how many each.
+        let per_arm = study
+            .file
+            .arms
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                let n = study.runs.iter().filter(|r| r.0 == i).count();
+                format!("{} {n}", a.name)
+            })
+            .collect::<Vec<_>>()
+            .join(", ");
+        format!(
+            "{} arm(s), seeds per arm ({per_arm})",
+            study.file.arms.len()
+        )
+    } else {
+        let planned = study.file.seeds.list().len();
+        format!("{} arm(s) × {planned} seed(s)", study.file.arms.len())
+    };
     format!(
-        "# Study: {}\n\n{} arm(s) × {planned} seed(s); {} of {} runs recorded. Each run's \
+        "# Study: {}\n\n{shape}; {} of {} runs recorded. Each run's \
          handed-over policy ({}) evaluated on {} deterministic episodes (reset seeds {}…){}. \
          The walking bar: `walk` in more than half of the episodes and at least 80 % past the 50 m \
          line. Intervals are 95 %: Wilson for rates, percentile bootstrap over runs (2,000 \
@@ -217,7 +238,6 @@ fn heading(dir: &Path, study: &Study, recorded: usize) -> String {
         } else {
             study.file.description.clone()
         },
-        study.file.arms.len(),
         recorded,
         study.runs.len(),
         match study.file.eval.policy {
