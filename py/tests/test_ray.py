@@ -171,6 +171,7 @@ name = "sac"
 agent = "sac"
 preset = "smoke"
 episodes = 3
+seeds = [1, 2, 3]
 """
 
 
@@ -209,7 +210,7 @@ def test_a_study_on_ray_gives_the_records_of_esrl_study_run(esrl_bin: Path,
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600)
     assert proc.returncode == 0, proc.stderr[-3000:]
     a, b = _records(local), _records(on_ray)
-    # 4 runs: config, eval, metrics, summary and the policy's actor and config, plus the ES
-    # runs' best.json.
-    assert len(a) == 4 * 6 + 2, sorted(a)
+    # 5 runs (2 seeds of the ES arm, the plain arm's own 3): config, eval, metrics, summary
+    # and the policy's actor and config, plus the ES runs' best.json.
+    assert len(a) == 5 * 6 + 2, sorted(a)
     assert a == b

@@ -100,7 +100,8 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _study_runs(path: str) -> int:
-    """How many runs a study file has (its arms × seeds), as `esrl study` counts them."""
+    """How many runs a study file has (each arm's seeds: its own, else the study's), as
+    `esrl study` counts them."""
     try:
         import tomllib
     except ImportError:  # Python < 3.11
@@ -108,9 +109,11 @@ def _study_runs(path: str) -> int:
 
     with open(path, "rb") as f:
         study = tomllib.load(f)
-    seeds = study.get("seeds", 0)
-    n_seeds = seeds if isinstance(seeds, int) else len(seeds)
-    return len(study.get("arm", [])) * n_seeds
+    def count(seeds: Any) -> int:
+        return seeds if isinstance(seeds, int) else len(seeds)
+
+    default = study.get("seeds", 0)
+    return sum(count(arm.get("seeds", default)) for arm in study.get("arm", []))
 
 
 def study(argv: List[str]) -> int:
