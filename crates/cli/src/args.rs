@@ -356,6 +356,12 @@ pub enum BenchWhat {
         /// Preset whose population and networks are timed.
         #[arg(long, value_enum, default_value_t = Preset::Paper)]
         preset: Preset,
+        /// Time the generations of a walking phase: start from this trained policy (as `esrl
+        /// train --init`; it must be the preset's task and networks) with the ES at its
+        /// `sigma_min`, where a long run's σ has decayed to. Without it, the generations are
+        /// a run's first ones, from random weights.
+        #[arg(long, value_name = "DIR")]
+        init: Option<PathBuf>,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,

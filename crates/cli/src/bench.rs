@@ -7,6 +7,7 @@ use esrl_agents::{Algo, Learner, NetConfig};
 use esrl_run::{build, AnyLearner, TrainConfig};
 use serde::Serialize;
 use serde_json::json;
+use std::path::Path;
 use std::time::Instant;
 
 fn emit<T: Serialize>(json_out: bool, value: &T, text: String) -> Result<()> {
@@ -43,10 +44,22 @@ pub fn update_ms(
 /// Generations timed by `bench es` (without gradient updates, so the policies stay random).
 const ES_BENCH_GENERATIONS: usize = 5;
 
-/// Times ES generations' evaluation (no gradient updates) at `threads` threads: seconds per
-/// generation and environment steps per generation, over [`ES_BENCH_GENERATIONS`].
-fn es_generation_s(preset: Preset, threads: usize) -> Result<(f64, u64)> {
+/// The configuration `bench es` times: ES-SAC on the walking task with `preset`; with
+/// `init`, started from that policy with the ES at its `sigma_min` (a walking phase).
+fn es_config(preset: Preset, init: Option<&Path>) -> TrainConfig {
     let mut cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, preset);
+    if let Some(dir) = init {
+        cfg.init = Some(std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf()));
+        cfg.es.sigma = cfg.es.sigma_min;
+    }
+    cfg
+}
+
+/// Times ES generations' evaluation (no gradient updates) of `cfg` at `threads` threads:
+/// seconds per generation and environment steps per generation, over
+/// [`ES_BENCH_GENERATIONS`].
+fn es_generation_s(cfg: &TrainConfig, threads: usize) -> Result<(f64, u64)> {
+    let mut cfg = cfg.clone();
     cfg.inner_cycles = 0;
     cfg.updates_per_step = None;
     cfg.rl.warm_start = 0;
@@ -70,16 +83,16 @@ fn es_generation_s(preset: Preset, threads: usize) -> Result<(f64, u64)> {
 /// generations on N threads).
 const WHOLE_MIN_S: f64 = 4.0;
 
-/// Seconds per whole ES-SAC generation of `preset` at `threads` threads, as `esrl train` runs
+/// Seconds per whole ES-SAC generation of `cfg` at `threads` threads, as `esrl train` runs
 /// it (rollouts, ES update and inner cycles, pipelined, on one pool): the warm start, one
 /// generation untimed, then the mean of `generations` (when `None`, as many as fill
-/// [`WHOLE_MIN_S`], at least 2). Returns the seconds and the generations timed.
+/// [`WHOLE_MIN_S`], at least 2). Returns the seconds, the generations timed and their env
+/// steps per generation. The same seed gives the same generations at any thread count.
 fn whole_generation_s(
-    preset: Preset,
+    cfg: &TrainConfig,
     threads: usize,
     generations: Option<usize>,
-) -> Result<(f64, usize)> {
-    let cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, preset);
+) -> Result<(f64, usize, f64)> {
     let envs = build::envs(cfg.env, &cfg.walk)?;
     let AnyLearner::Hybrid(mut h) = build::learner(&cfg, &envs)? else {
         anyhow::bail!("an ES agent builds a hybrid learner");
@@ -91,11 +104,13 @@ fn whole_generation_s(
         h.step()?;
         let first = t.elapsed().as_secs_f64();
         let n = generations.unwrap_or_else(|| ((WHOLE_MIN_S / first).ceil() as usize).max(2));
+        let steps = h.env_steps();
         let t = Instant::now();
         for _ in 0..n {
             h.step()?;
         }
-        Ok((t.elapsed().as_secs_f64() / n as f64, n))
+        let per = (h.env_steps() - steps) as f64 / n as f64;
+        Ok((t.elapsed().as_secs_f64() / n as f64, n, per))
     })
 }
 
@@ -196,13 +211,14 @@ pub fn run(what: &BenchWhat) -> Result<()> {
         BenchWhat::Es {
             threads,
             preset,
+            init,
             json,
         } => {
             let threads = *threads as usize;
-            let (t1, steps) = es_generation_s(*preset, 1)?;
-            let (tn, _) = es_generation_s(*preset, threads)?;
+            let cfg = es_config(*preset, init.as_deref());
+            let (t1, steps) = es_generation_s(&cfg, 1)?;
+            let (tn, _) = es_generation_s(&cfg, threads)?;
             let eff = t1 / (tn * threads as f64);
-            let cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, *preset);
             let arch = if cfg.network.recurrent() {
                 Arch::Lstm
             } else {
@@ -215,10 +231,12 @@ pub fn run(what: &BenchWhat) -> Result<()> {
             // The inner updates of a generation that collected `steps` env steps.
             let cycles = build::hybrid_config(&cfg).inner_cycles_for(steps as usize);
             let train_s = upd * cycles as f64 / 1e3;
-            let (g1, whole) = whole_generation_s(*preset, 1, None)?;
-            let (gn, _) = whole_generation_s(*preset, threads, Some(whole))?;
+            let (g1, whole, whole_steps) = whole_generation_s(&cfg, 1, None)?;
+            let (gn, _, _) = whole_generation_s(&cfg, threads, Some(whole))?;
             let r = json!({
                 "preset": format!("{preset:?}").to_lowercase(),
+                "init": cfg.init,
+                "sigma": cfg.es.sigma,
                 "population": cfg.es.population,
                 "env_steps_per_generation": steps,
                 "env_steps_per_s_1_thread": steps as f64 / t1,
@@ -234,6 +252,7 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                 "generation_s_n_threads": gn,
                 "generation_speedup": g1 / gn,
                 "generations_timed": whole,
+                "whole_env_steps_per_generation": whole_steps,
             });
             let text = format!(
                 "rollouts of one generation ({} individuals, {steps} env steps, mean of \
@@ -242,11 +261,20 @@ pub fn run(what: &BenchWhat) -> Result<()> {
                  one SAC update: {upd:.2} ms on 1 thread, {upd_n:.2} ms on {threads}; {} inner \
                  updates ≈ {train_s:.2} s on 1 thread\n\
                  whole generation as `esrl train` runs it (rollouts + training, mean of \
-                 {whole} after one): {g1:.2} s on 1 thread, {gn:.2} s on {threads} ({:.2}×)",
+                 {whole} after one, {whole_steps:.0} env steps each): {g1:.2} s on 1 thread, \
+                 {gn:.2} s on {threads} ({:.2}×){}",
                 cfg.es.population,
                 eff * 100.0,
                 cycles,
-                g1 / gn
+                g1 / gn,
+                match &cfg.init {
+                    Some(dir) => format!(
+                        "\nfrom the policy in {} with the ES at σ = {}",
+                        dir.display(),
+                        cfg.es.sigma
+                    ),
+                    None => String::new(),
+                }
             );
             emit(*json, &r, text)
         }

@@ -152,6 +152,40 @@ fn a_benchmark_of_nothing_is_refused() {
     assert!(err.contains("--threads"), "{err}");
 }
 
+/// `bench es --init DIR` times generations from a trained policy (a walking phase) with the
+/// ES at its σ_min, and refuses a policy of another task or network.
+#[test]
+fn bench_es_times_generations_from_a_trained_policy() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("run");
+    smoke("es-sac", &run, &["--generations", "2"]);
+    let out = common::stdout(&[
+        "bench",
+        "es",
+        "--preset",
+        "smoke",
+        "--init",
+        s(&run),
+        "--json",
+    ]);
+    let r: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(r["init"].as_str().unwrap().ends_with("run"), "{r}");
+    assert_eq!(
+        r["sigma"].as_f64(),
+        Some(0.01),
+        "the smoke preset's sigma_min: {r}"
+    );
+    assert!(
+        r["whole_env_steps_per_generation"].as_f64().unwrap() > 0.0,
+        "{r}"
+    );
+    let plain = common::stdout(&["bench", "es", "--preset", "smoke", "--json"]);
+    let plain: serde_json::Value = serde_json::from_str(&plain).unwrap();
+    assert!(plain["init"].is_null(), "{plain}");
+    let err = fails(&["bench", "es", "--preset", "walker", "--init", s(&run)]);
+    assert!(err.contains("another task or network"), "{err}");
+}
+
 #[test]
 fn one_process_trains_a_run_folder_at_a_time() {
     let tmp = tempfile::tempdir().unwrap();
