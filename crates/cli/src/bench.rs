@@ -94,7 +94,7 @@ fn whole_generation_s(
     generations: Option<usize>,
 ) -> Result<(f64, usize, f64)> {
     let envs = build::envs(cfg.env, &cfg.walk)?;
-    let AnyLearner::Hybrid(mut h) = build::learner(&cfg, &envs)? else {
+    let AnyLearner::Hybrid(mut h) = build::learner(cfg, &envs)? else {
         anyhow::bail!("an ES agent builds a hybrid learner");
     };
     let pool = build::pool(threads)?;
