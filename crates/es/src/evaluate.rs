@@ -105,9 +105,8 @@ pub fn rollout_genome(
 
 /// Runs [`rollout_genome`] over a generation's genomes and returns one evaluation per genome,
 /// in the order of `generation.genomes`. That list may be part of the population: the
-/// pipelined loop asks for individuals 1.. ahead and, possibly while they are still out,
-/// individual 0 alone (each genome names its place in [`Genome::index`]), so an
-/// implementation may be called from two threads at once. Implementations may run anywhere (threads, processes,
+/// pipelined loop asks for individuals 1.. ahead, then individual 0 alone (each genome names
+/// its place in [`Genome::index`]). Implementations may run anywhere (threads, processes,
 /// machines); results must not depend on where or in which order the genomes ran.
 pub trait Evaluator: Send + Sync + fmt::Debug {
     /// Evaluates every genome of `generation`.

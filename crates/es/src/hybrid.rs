@@ -36,11 +36,9 @@
 //! **Pipelining** wraps the evaluator and changes no number. The N − 1 perturbations of
 //! generation g + 1 depend only on the ES mean and σ after generation g's eqs. 10–11, not on
 //! the learner, so the inner training of g runs beside their rollouts (both on the rayon
-//! pool the loop runs in). Individual 0 of g + 1 is the actor those cycles train (when
-//! replacement comes first, the default order), so it rolls out as soon as they end, beside
-//! the perturbations still in flight; generation g + 1 takes that rollout if the actor is
-//! still the one it was made with, and rolls it out again otherwise. The transitions still
-//! enter the buffer at generation g + 1's tell, in individual order, so the loop computes exactly what the sequential one does
+//! pool the loop runs in), and eq. 9 of g + 1 then rolls out individual 0 alone, the trained
+//! actor. Their transitions still enter the buffer at generation g + 1's tell, in individual
+//! order, so the loop computes exactly what the sequential one does
 //! ([`Hybrid::set_pipelined`] turns it off; `es/tests/pipeline.rs` compares the two). The
 //! rollouts in flight are not part of a checkpoint: a run restored at a generation boundary
 //! rolls them out again, with the same result.
@@ -241,14 +239,12 @@ pub struct Hybrid {
     prefetched: Option<Prefetched>,
 }
 
-/// Individuals 1.. of a generation, evaluated ahead of it, and individual 0 (the RL actor
-/// as the inner cycles left it) when it could be.
+/// Individuals 1.. of a generation, evaluated ahead of it.
 #[derive(Debug, Clone)]
 struct Prefetched {
     generation: usize,
     genomes: Vec<Genome>,
     evaluations: Vec<Evaluation>,
-    first: Option<(Genome, Evaluation)>,
 }
 
 /// The tensor of a checkpoint that holds the ES mean θ.
@@ -569,28 +565,12 @@ impl Hybrid {
             }
             Some(ahead) => {
                 // Eq. 8 and eq. 9 for individual 0 (the RL actor), the rest as prefetched.
-                // Individual 0 was rolled out as soon as the inner cycles ended when it is
-                // still the actor they left (nothing changed it since).
-                let actor = self.trainer.agent().genome();
-                let (first, mut evaluated) = match ahead.first {
-                    Some((genome, evaluation)) if genome.params == actor => {
-                        let first = Generation {
-                            index: self.generation,
-                            policy: self.trainer.agent().policy(),
-                            genomes: vec![genome],
-                        };
-                        (first, vec![evaluation])
-                    }
-                    _ => {
-                        let first = Generation {
-                            index: self.generation,
-                            policy: self.trainer.agent().policy(),
-                            genomes: self.genomes(self.generation, 0, [actor]),
-                        };
-                        let evaluated = self.evaluator.evaluate(&first)?;
-                        (first, evaluated)
-                    }
+                let first = Generation {
+                    index: self.generation,
+                    policy: self.trainer.agent().policy(),
+                    genomes: self.genomes(self.generation, 0, [self.trainer.agent().genome()]),
                 };
+                let mut evaluated = self.evaluator.evaluate(&first)?;
                 evaluated.extend(ahead.evaluations);
                 let mut generation = first;
                 generation.genomes.extend(ahead.genomes);
@@ -601,51 +581,25 @@ impl Hybrid {
     }
 
     /// The inner training cycles; with `prefetch`, beside them on the rayon pool, the
-    /// rollouts of the next generation's perturbations, and once the cycles end the rollout
-    /// of its individual 0, the actor they trained (when replacement came before them: with
-    /// [`LoopOrder::TrainThenReplace`] it may still change). Both are kept for the next
-    /// [`Hybrid::step`], which uses individual 0's only if the actor is still that one; an
-    /// evaluation error surfaces when that generation is evaluated again.
+    /// rollouts of the next generation's perturbations (kept for the next [`Hybrid::step`]; an
+    /// evaluation error there surfaces when that generation is evaluated again).
     fn train(&mut self, cycles: usize, prefetch: bool) -> Result<LossMeans, AgentError> {
         if !prefetch || self.cfg.es.population < 2 {
             return self.trainer.train(cycles);
         }
-        let index = self.generation + 1;
         let next = Generation {
-            index,
+            index: self.generation + 1,
             policy: self.trainer.agent().policy(),
-            genomes: self.perturbations(index),
+            genomes: self.perturbations(self.generation + 1),
         };
-        // Individual 0's seeds and rollouts; its parameters are the trained actor's.
-        let first = (self.cfg.es.order == LoopOrder::ReplaceThenTrain).then(|| Generation {
-            index,
-            policy: self.trainer.agent().policy(),
-            genomes: self.genomes(index, 0, [Vec::new()]),
-        });
         let evaluator = Arc::clone(&self.evaluator);
         let trainer = &mut self.trainer;
-        let ((losses, first), evaluated) = rayon::join(
-            || {
-                let losses = trainer.train(cycles);
-                let first = match first {
-                    Some(mut g) if losses.is_ok() => {
-                        g.genomes[0].params = trainer.agent().genome();
-                        let evaluated = evaluator.evaluate(&g).ok();
-                        evaluated
-                            .and_then(|mut e| e.pop().filter(|_| e.is_empty()))
-                            .and_then(|e| Some((g.genomes.pop()?, e)))
-                    }
-                    _ => None,
-                };
-                (losses, first)
-            },
-            || evaluator.evaluate(&next),
-        );
+        let (losses, evaluated) =
+            rayon::join(|| trainer.train(cycles), || evaluator.evaluate(&next));
         self.prefetched = evaluated.ok().map(|evaluations| Prefetched {
             generation: next.index,
             genomes: next.genomes,
             evaluations,
-            first,
         });
         losses
     }

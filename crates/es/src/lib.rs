@@ -46,8 +46,7 @@
 //!   widths differ (`esrl-nn`'s products) or across versions of the simulator.
 //! - A generation waits for its slowest individual: every genome of a generation is rolled
 //!   out before anything is learned. Only the next generation's perturbations overlap the
-//!   inner cycles (pipelining, `hybrid.rs`); individual 0 waits for them and rolls out once
-//!   they end.
+//!   inner cycles (pipelining, `hybrid.rs`); individual 0 waits for them.
 //! - The strategy is isotropic (one σ for every parameter, no covariance), as the paper's;
 //!   σ follows eq. 11's fixed decay rather than adapting to progress.
 //! - Fitness is the mean return of K rollouts (K = 1 by default): noisy for stochastic

@@ -28,7 +28,7 @@ pub trait Transport: Send + Sync + fmt::Debug {
 /// What a [`WireEvaluator`] has moved so far.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Traffic {
-    /// Calls to the transport (a pipelined generation makes two, which may overlap).
+    /// Calls to the transport (a pipelined generation makes two).
     pub calls: u64,
     /// Genomes sent.
     pub genomes: u64,

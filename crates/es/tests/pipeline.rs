@@ -68,25 +68,13 @@ fn pipelined_and_sequential_loops_agree_bit_for_bit() {
                     pipelined.buffer() == sequential.buffer(),
                     "{algo:?}: the buffers hold the same transitions in the same order"
                 );
-                // Sequential: 6 genomes a generation. Pipelined: 6, then during each training
-                // the next generation's 5 perturbations and, once the inner cycles end, its
-                // individual 0 (the trained actor) alone, in either order; no generation
-                // rolls individual 0 out again.
+                // Sequential: 6 genomes a generation. Pipelined: 6, then 5 ahead during each
+                // training and individual 0 alone at the start of every later generation.
                 assert_eq!(*ev_s.calls.lock().unwrap(), vec![6; 5]);
-                let calls = ev_p.calls.lock().unwrap().clone();
-                let mut pairs: Vec<[usize; 2]> = calls[1..]
-                    .chunks(2)
-                    .map(|c| {
-                        let mut pair = [c[0], *c.get(1).unwrap_or(&0)];
-                        pair.sort_unstable();
-                        pair
-                    })
-                    .collect();
-                pairs.dedup();
                 assert_eq!(
-                    (calls.len(), calls[0], pairs),
-                    (11, 6, vec![[1, 5]]),
-                    "{algo:?}, {threads} threads, own pool {own_pool}: {calls:?}"
+                    *ev_p.calls.lock().unwrap(),
+                    vec![6, 5, 1, 5, 1, 5, 1, 5, 1, 5],
+                    "{algo:?}, {threads} threads, own pool {own_pool}"
                 );
             }
         }

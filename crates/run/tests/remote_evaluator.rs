@@ -84,11 +84,11 @@ fn check(agent: AgentKind, env: EnvKind) {
     );
     let traffic = wire.traffic();
     let population = cfg.es.population as u64;
-    // Pipelined: generation 0 whole in one call, then during each generation's training the
-    // next one's perturbations and, once the inner cycles end, its individual 0 (two calls
-    // each); the last generation also rolls the next one out ahead.
-    assert_eq!(traffic.genomes, 6 * population);
-    assert_eq!(traffic.calls, 1 + 2 * 5);
+    // Pipelined: generation 0 whole in one call, then per generation the next one's
+    // perturbations (during the training) and its own individual 0; the last generation also
+    // rolls the next one's perturbations out ahead.
+    assert_eq!(traffic.genomes, 5 * population + population - 1);
+    assert_eq!(traffic.calls, 1 + 5 + 4);
     assert!(traffic.bytes_out > 0 && traffic.bytes_in > 0);
 }
 

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import os
 import signal
-import threading
 import time
 from typing import Any, Dict, List, Optional
 
@@ -72,9 +71,7 @@ def _maybe_die() -> None:
 class RayEvaluator:
     """The driver's side: called by the Rust hybrid loop with a list of genome bytes, it runs
     one Ray task per genome, at most ``workers`` at a time when given, and returns the
-    evaluation bytes in the order of the genomes. Counts the seconds it waited: wall time
-    with at least one call in flight (the pipelined loop may call it from two threads at
-    once)."""
+    evaluation bytes in the order of the genomes. Counts the seconds it waited."""
 
     def __init__(self, config_toml: str, workers: Optional[int] = None) -> None:
         import ray
@@ -86,25 +83,10 @@ class RayEvaluator:
         self._task = ray.remote(num_cpus=1, max_retries=MAX_RETRIES)(rollout)
         self.workers = workers
         self.wait_s = 0.0
-        self._lock = threading.Lock()
-        self._in_flight = 0
-        self._since = 0.0
 
     def __call__(self, genomes: List[bytes]) -> List[bytes]:
-        with self._lock:
-            if self._in_flight == 0:
-                self._since = time.perf_counter()
-            self._in_flight += 1
-        try:
-            return self._roll_out(genomes)
-        finally:
-            with self._lock:
-                self._in_flight -= 1
-                if self._in_flight == 0:
-                    self.wait_s += time.perf_counter() - self._since
-
-    def _roll_out(self, genomes: List[bytes]) -> List[bytes]:
         ray = self._ray
+        started = time.perf_counter()
         limit = self.workers or len(genomes)
         refs: List[Any] = []
         in_flight: List[Any] = []
@@ -115,4 +97,6 @@ class RayEvaluator:
             ref = self._task.remote(self._config, genome)
             refs.append(ref)
             in_flight.append(ref)
-        return ray.get(refs)
+        out = ray.get(refs)
+        self.wait_s += time.perf_counter() - started
+        return out
