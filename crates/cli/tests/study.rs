@@ -34,6 +34,22 @@ fn write_study(dir: &Path) -> String {
     p.to_str().unwrap().to_owned()
 }
 
+/// Writes `text` as `dir/own.toml` and runs it with `esrl study run` into `dir/out`; returns
+/// the study file and the output folder.
+fn run_own_study(dir: &Path, text: &str) -> (std::path::PathBuf, std::path::PathBuf) {
+    let study = dir.join("own.toml");
+    std::fs::write(&study, text).unwrap();
+    let out = dir.join("out");
+    ok(&[
+        "study",
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    (study, out)
+}
+
 /// Asserts two record lists are equal, naming the first file that differs.
 fn same(a: &[(String, String)], b: &[(String, String)], what: &str) {
     assert_eq!(
@@ -346,7 +362,6 @@ fn an_arms_init_names_each_seeds_own_policy() {
         let src = tmp.path().join(format!("src-s{seed}"));
         common::smoke("sac", &src, &["--episodes", "2", "--seed", seed]);
     }
-    let study = tmp.path().join("own.toml");
     let text = r#"
 seeds = [0, 1]
 [eval]
@@ -358,15 +373,7 @@ preset = "smoke"
 episodes = 2
 set = { init = "src-s{seed}" }
 "#;
-    std::fs::write(&study, text).unwrap();
-    let out = tmp.path().join("out");
-    ok(&[
-        "study",
-        "run",
-        study.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (study, out) = run_own_study(tmp.path(), text);
     for seed in [0, 1] {
         let record: toml::Table =
             std::fs::read_to_string(out.join(format!("records/tuned-s{seed}/config.toml")))
@@ -403,9 +410,8 @@ set = { init = "src-s{seed}" }
 #[test]
 fn an_arm_may_have_seeds_of_its_own() {
     let tmp = tempfile::tempdir().unwrap();
-    let study = tmp.path().join("own.toml");
-    std::fs::write(
-        &study,
+    let (_, out) = run_own_study(
+        tmp.path(),
         r#"
 seeds = 2
 [eval]
@@ -422,16 +428,7 @@ preset = "smoke"
 episodes = 2
 seeds = [5]
 "#,
-    )
-    .unwrap();
-    let out = tmp.path().join("out");
-    ok(&[
-        "study",
-        "run",
-        study.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    );
     let mut names: Vec<String> = std::fs::read_dir(out.join("records"))
         .unwrap()
         .map(|e| e.unwrap().file_name().into_string().unwrap())
