@@ -114,6 +114,8 @@ def test_unknown_settings_are_refused() -> None:
         MujocoWalk(walk, cone="round")
     with pytest.raises(ValueError, match="servo 'pid'"):
         MujocoWalk(walk, servo="pid")
+    with pytest.raises(ValueError, match="limits 'hard'"):
+        MujocoWalk(walk, limits="hard")
     with pytest.raises(SystemExit):
         main([str(FLAGSHIP), "--cone", "round"])
 
@@ -132,8 +134,8 @@ def test_several_policies_under_every_setting(capsys) -> None:
     assert main([str(FLAGSHIP), "--episodes", "1", "--cone", "all", "--json"]) == 0
     results = json.loads(capsys.readouterr().out)
     assert [r["mujoco_settings"] for r in results] == [
-        {"cone": "pyramidal", "servo": "explicit", "action": "target"},
-        {"cone": "elliptic", "servo": "explicit", "action": "target"}]
+        {"cone": "pyramidal", "servo": "explicit", "action": "target", "limits": "soft"},
+        {"cone": "elliptic", "servo": "explicit", "action": "target", "limits": "soft"}]
     assert results[0]["esrl"] == results[1]["esrl"], "esrl's episodes are run once"
 
 
@@ -146,6 +148,33 @@ def test_a_torque_policy_runs_once_per_cone(capsys) -> None:
     for cone in ("pyramidal", "elliptic"):
         assert out.count(f"| MuJoCo, {cone} cone, torques |") == 1
     assert "servo |" not in out
+
+
+def test_stiff_limits_hold_the_joints_near_the_urdfs_limits(capsys) -> None:
+    """Full torque driving both ankles into their −20° stops for 0.5 s: MuJoCo's default limit
+    lets them bend far past; the stiff one keeps them within 4° of the URDF's limit (Rapier's
+    hard limit keeps them at it). `--limits all` runs both, the stiff rows named."""
+    torque = FLAGSHIP.parents[1] / "torque" / "records" / "torque-s0" / "policy"
+    walk = esrl_rs.load_policy(torque)._core.walk_config
+    past = {}
+    for limits in ("soft", "stiff"):
+        mj = MujocoWalk(walk, limits=limits)
+        ankles = [k for k, n in enumerate(mj.rust.action_names) if n.endswith("ankle")]
+        action = np.zeros(6)
+        action[ankles] = -1.0
+        mj.reset(0)
+        worst = 0.0
+        for _ in range(20):
+            _, _, _, s = mj.step(action)
+            q = np.asarray(s["joint_angles"])[ankles]
+            worst = max(worst, float(np.degrees(mj.lo[ankles] - q).max()))
+        past[limits] = worst
+    assert past["stiff"] < 4.0, past
+    assert past["soft"] > 3 * past["stiff"], past
+    assert main([str(torque), "--episodes", "1", "--cone", "elliptic", "--limits", "all"]) == 0
+    out = capsys.readouterr().out
+    assert out.count("| MuJoCo, elliptic cone, torques |") == 1
+    assert out.count("| MuJoCo, elliptic cone, torques, stiff limits |") == 1
 
 
 def test_targets_follow_the_joint_ranges() -> None:

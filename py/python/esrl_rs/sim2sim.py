@@ -27,11 +27,18 @@ integrates it implicitly inside its solver; here it is an explicit torque per ph
 stable at these gains: ω = √(kp/I) ≈ 55 rad/s, ω·h ≈ 0.34). A policy that walks in both has
 learned a gait, not a solver artifact; one that walks in one only depends on what differs.
 
-Two of MuJoCo's own settings can be chosen, to see whether a result depends on them:
+Three of MuJoCo's own settings can be chosen, to see whether a result depends on them:
 ``cone`` (:data:`CONES`: MuJoCo's default ``pyramidal`` friction cone, or ``elliptic``, the
-shape of Rapier's, which caps the tangential impulse's magnitude) and ``servo``
+shape of Rapier's, which caps the tangential impulse's magnitude), ``servo``
 (:data:`SERVOS`: the explicit torque above, or MuJoCo position actuators of the same gains
-and torque limit, their damping integrated implicitly as Rapier integrates its servo).
+and torque limit, their damping integrated implicitly as Rapier integrates its servo) and
+``limits`` (:data:`LIMITS`). MuJoCo's default joint limit (``soft``: ``solref`` 0.02 s,
+``solimp`` 0.9–0.95) is a spring that torque can push through: a torque policy pressing its
+ankles into their ±20° stops bends them up to 19° past (``results/fast-robust``). ``stiff``
+is the stiffest limit MuJoCo's integrator allows at this step (``solref`` time constant two
+physics steps, ``solimp`` 0.99–0.999): a few degrees past at most (about 2° under the
+walking policies checked, 3° for ankles driven into their stops at full torque), nearer
+Rapier's hard limit.
 """
 
 from __future__ import annotations
@@ -49,7 +56,7 @@ import numpy as np
 
 from . import _native, metrics
 
-__all__ = ["MujocoWalk", "cross_check", "cross_checks", "main", "CONES", "SERVOS"]
+__all__ = ["MujocoWalk", "cross_check", "cross_checks", "main", "CONES", "SERVOS", "LIMITS"]
 
 #: MuJoCo's friction cones: ``pyramidal`` (its default) or ``elliptic``.
 CONES = ("pyramidal", "elliptic")
@@ -57,6 +64,12 @@ CONES = ("pyramidal", "elliptic")
 #: each physics step) or ``actuator`` (MuJoCo position actuators, damping integrated
 #: implicitly).
 SERVOS = ("explicit", "actuator")
+#: MuJoCo's joint-limit constraint: ``soft`` (its default) or ``stiff`` (module docs).
+LIMITS = ("soft", "stiff")
+#: ``solref`` and ``solimp`` of a ``stiff`` limit: the time constant in physics steps (MuJoCo
+#: raises a shorter one to two steps), damping ratio 1, impedance 0.99 to 0.999 over 1 mm
+#: (1 mrad for a hinge).
+_STIFF_STEPS, _STIFF_SOLIMP = 2.0, (0.99, 0.999, 0.001)
 
 
 def _floating_urdf(text: str) -> str:
@@ -92,13 +105,16 @@ class MujocoWalk:
     step of the gait trace."""
 
     def __init__(self, walk_config: Mapping[str, Any], cone: str = "pyramidal",
-                 servo: str = "explicit") -> None:
+                 servo: str = "explicit", limits: str = "soft") -> None:
         import mujoco
 
         if cone not in CONES:
             raise ValueError(f"cone {cone!r}: expected one of {', '.join(CONES)}")
         if servo not in SERVOS:
             raise ValueError(f"servo {servo!r}: expected one of {', '.join(SERVOS)}")
+        if limits not in LIMITS:
+            raise ValueError(f"limits {limits!r}: expected one of {', '.join(LIMITS)}")
+        self.limits = limits
 
         self.mujoco = mujoco
         self.rust = _native.EnvCore.walk(dict(walk_config))
@@ -141,6 +157,11 @@ class MujocoWalk:
             if m.geom_type[g] != mujoco.mjtGeom.mjGEOM_PLANE:
                 m.geom_contype[g], m.geom_conaffinity[g] = 1, 0
                 m.geom_friction[g][0] = float(physics["friction"])
+        if limits == "stiff":
+            for j in range(m.njnt):
+                if m.jnt_limited[j]:
+                    m.jnt_solref[j] = [_STIFF_STEPS * self.h, 1.0]
+                    m.jnt_solimp[j][:3] = _STIFF_SOLIMP
         self.m, self.d = m, mujoco.MjData(m)
         self.torso = m.body(self._root_name(text)).id
         self.act_joints = [m.joint(n).id for n in names]
@@ -361,20 +382,21 @@ def _summary(gaits: List[Dict[str, Any]]) -> Dict[str, Any]:
 
 
 def cross_check(path: str, episodes: int = 10, seed: int = 0, cone: str = "pyramidal",
-                servo: str = "explicit", last: bool = False) -> Dict[str, Any]:
+                servo: str = "explicit", last: bool = False,
+                limits: str = "soft") -> Dict[str, Any]:
     """The policy in ``path`` (a run folder's kept policy, or with ``last`` its newest
     checkpoint, as ``esrl eval``; a checkpoint, ``best/`` or record ``policy/`` folder)
     from reset seeds ``seed … seed + episodes − 1`` in esrl (``Policy.evaluate``, the code
     of ``esrl eval``) and on MuJoCo (:class:`MujocoWalk` with ``cone`` and ``servo``): both
     engines' gait metrics (:func:`esrl_rs.metrics.gait_metrics`), summarised per engine and
-    per episode."""
-    return cross_checks(path, episodes, seed, [(cone, servo)], last)[0]
+    per episode. ``limits``: MuJoCo's joint limits (:data:`LIMITS`)."""
+    return cross_checks(path, episodes, seed, [(cone, servo, limits)], last)[0]
 
 
 def cross_checks(path: str, episodes: int, seed: int,
                  settings: Sequence[Sequence[str]], last: bool = False) -> List[Dict[str, Any]]:
-    """:func:`cross_check` under each ``(cone, servo)`` of ``settings``, esrl's episodes run
-    once."""
+    """:func:`cross_check` under each ``(cone, servo)`` or ``(cone, servo, limits)`` of
+    ``settings``, esrl's episodes run once."""
     from .policy import load_policy
 
     # Both engines run the plain task: a policy trained under disturbances ([walk.perturb])
@@ -391,19 +413,21 @@ def cross_checks(path: str, episodes: int, seed: int,
 
     out = []
     done = set()
-    for cone, servo in settings:
-        env = MujocoWalk(walk, cone=cone, servo=servo)
+    for cone, servo, *rest in settings:
+        limits = rest[0] if rest else "soft"
+        env = MujocoWalk(walk, cone=cone, servo=servo, limits=limits)
         # A torque policy has no servo: every servo setting runs the same episodes.
-        if (cone, env.servo) in done:
+        if (cone, env.servo, limits) in done:
             continue
-        done.add((cone, env.servo))
+        done.add((cone, env.servo, limits))
         track = float(env.track)
         mj = [metrics.gait_metrics(env.episode(policy, seed + k), track_length=track)
               for k in range(episodes)]
         out.append({
             "policy": os.fspath(path), "checkpoint": policy.checkpoint, "seed": seed,
             "episodes": episodes,
-            "mujoco_settings": {"cone": cone, "servo": env.servo, "action": env.mode},
+            "mujoco_settings": {"cone": cone, "servo": env.servo, "action": env.mode,
+                                "limits": limits},
             "esrl": _summary(ours), "mujoco": _summary(mj),
             "per_episode": [{
                 "seed": seed + k, "esrl": cls(g), "mujoco": cls(m),
@@ -425,7 +449,9 @@ _HEADER = ("| engine | gait classes | finished 50 m | falls | track time (s) | s
 
 
 def _table(r: Dict[str, Any]) -> str:
-    return "\n".join([_HEADER, _row("esrl (Rapier)", r["esrl"]), _row("MuJoCo", r["mujoco"])]) + "\n"
+    stiff = r["mujoco_settings"].get("limits", "soft") == "stiff"
+    name = "MuJoCo, stiff limits" if stiff else "MuJoCo"
+    return "\n".join([_HEADER, _row("esrl (Rapier)", r["esrl"]), _row(name, r["mujoco"])]) + "\n"
 
 
 def _tables(results: Sequence[Dict[str, Any]]) -> str:
@@ -439,6 +465,8 @@ def _tables(results: Sequence[Dict[str, Any]]) -> str:
                       _HEADER, _row("esrl (Rapier)", r["esrl"])]
         st = r["mujoco_settings"]
         how = f"{st['servo']} servo" if st.get("action", "target") == "target" else "torques"
+        if st.get("limits", "soft") == "stiff":
+            how += ", stiff limits"
         parts.append(_row(f"MuJoCo, {st['cone']} cone, {how}", r["mujoco"]))
     return "\n".join(parts) + "\n"
 
@@ -461,6 +489,10 @@ def main(argv: Optional[List[str]] = None) -> int:
                     help="the joint-angle servo as a torque computed at each physics step "
                     "(explicit, the default) or as MuJoCo position actuators (actuator; all: "
                     "both)")
+    ap.add_argument("--limits", choices=LIMITS + ("all",), default="soft",
+                    help="MuJoCo's joint limits: soft (the default, MuJoCo's own: torque can "
+                    "push a joint well past its limit), stiff (the stiffest MuJoCo allows, "
+                    "within about 2 degrees, as Rapier's hard limits) or all: both")
     ap.add_argument("--json", action="store_true", help="print the result as JSON")
     a = ap.parse_args(argv)
     try:
@@ -474,7 +506,8 @@ def main(argv: Optional[List[str]] = None) -> int:
         return 2
     cones = CONES if a.cone == "all" else (a.cone,)
     servos = SERVOS if a.servo == "all" else (a.servo,)
-    settings = [(c, s) for c in cones for s in servos]
+    limits = LIMITS if a.limits == "all" else (a.limits,)
+    settings = [(c, s, lim) for lim in limits for c in cones for s in servos]
     results: List[Dict[str, Any]] = []
     try:
         for p in a.policy:
