@@ -18,7 +18,8 @@ import pytest
 pytest.importorskip("mujoco", reason="MuJoCo is optional: pip install 'esrl_rs[mujoco]'")
 
 import esrl_rs  # noqa: E402
-from esrl_rs.sim2sim import MujocoWalk, cross_check, main  # noqa: E402
+from esrl_rs.sim2sim import (MujocoWalk, _past_limit_deg, cross_check, cross_checks,  # noqa: E402
+                             main)
 
 FLAGSHIP = Path(__file__).resolve().parents[2] / "results" / "walking" / "flagship"
 
@@ -175,6 +176,21 @@ def test_stiff_limits_hold_the_joints_near_the_urdfs_limits(capsys) -> None:
     out = capsys.readouterr().out
     assert out.count("| MuJoCo, elliptic cone, torques |") == 1
     assert out.count("| MuJoCo, elliptic cone, torques, stiff limits |") == 1
+    assert "| past a limit (°) |" in out
+    soft, stiff = cross_checks(str(torque), 1, 1000, [("elliptic", "explicit", "soft"),
+                                                      ("elliptic", "explicit", "stiff")])
+    assert [r["mujoco_settings"]["limits"] for r in (soft, stiff)] == ["soft", "stiff"]
+    # Rapier's limit, and MuJoCo's stiff one, hold this walk's joints within a few degrees.
+    assert 0.0 <= soft["esrl"]["past_limit_deg"] < 3.0, soft["esrl"]
+    assert stiff["mujoco"]["past_limit_deg"] < 5.0, stiff["mujoco"]
+
+
+def test_past_limit_by_hand() -> None:
+    """Degrees past the nearest bound, the largest over steps and limited joints; 0 inside."""
+    angles = [[0.0, 0.5, 3.0], [-0.2, 0.1, -3.0]]
+    limits = [[-0.1, 0.1], [0.0, 0.4], None]
+    assert _past_limit_deg(angles, limits) == pytest.approx(np.degrees(0.1))
+    assert _past_limit_deg([[0.05, 0.2, 9.0]], limits) == 0.0
 
 
 def test_targets_follow_the_joint_ranges() -> None:

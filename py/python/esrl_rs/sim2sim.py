@@ -36,9 +36,11 @@ and torque limit, their damping integrated implicitly as Rapier integrates its s
 ``solimp`` 0.9–0.95) is a spring that torque can push through: a torque policy pressing its
 ankles into their ±20° stops bends them up to 19° past (``results/fast-robust``). ``stiff``
 is the stiffest limit MuJoCo's integrator allows at this step (``solref`` time constant two
-physics steps, ``solimp`` 0.99–0.999): a few degrees past at most (about 2° under the
-walking policies checked, 3° for ankles driven into their stops at full torque), nearer
-Rapier's hard limit.
+physics steps, ``solimp`` 0.99–0.999): a few degrees past at most (2–4° under the walking
+policies checked, 3° for ankles driven into their stops at full torque), as Rapier's own
+limit (about 2° past under the same policies). Every summary says how far the joints went
+(``past_limit_deg``: the largest angle past a URDF limit over the episodes, any actuated
+joint), in both engines.
 """
 
 from __future__ import annotations
@@ -363,7 +365,20 @@ class MujocoWalk:
                 "fell": fell, "success_time": success_time, "joint_limits": limits}
 
 
-def _summary(gaits: List[Dict[str, Any]]) -> Dict[str, Any]:
+def _past_limit_deg(angles: Any, limits: Sequence[Any]) -> float:
+    """The largest angle (degrees, ≥ 0) by which any joint of ``angles`` (steps × joints,
+    radians) went past its ``limits`` (``[lower, upper]`` per joint, ``None`` if unlimited)."""
+    q = np.asarray(angles, dtype=np.float64).reshape(len(angles), -1)
+    worst = 0.0
+    for k, lim in enumerate(limits):
+        if lim is None or len(q) == 0:
+            continue
+        lo, hi = float(lim[0]), float(lim[1])
+        worst = max(worst, float(np.max(np.maximum(lo - q[:, k], q[:, k] - hi))))
+    return math.degrees(worst)
+
+
+def _summary(gaits: List[Dict[str, Any]], past_limit: Sequence[float]) -> Dict[str, Any]:
     classes: Dict[str, int] = {}
     for g in gaits:
         c = (g.get("cycle") or {}).get("gait_class", "fall")
@@ -378,6 +393,8 @@ def _summary(gaits: List[Dict[str, Any]]) -> Dict[str, Any]:
         "speed": float(np.mean([g["mean_forward_velocity"] for g in gaits])),
         "sway": float(np.mean([g["mean_abs_lateral"] for g in gaits])),
         "knee_asymmetry": float(np.mean([g["knee_torque_asymmetry"] for g in gaits])),
+        # How far the joints went past the URDF's limits (module docs: ``limits``).
+        "past_limit_deg": max(past_limit, default=0.0),
     }
 
 
@@ -405,8 +422,11 @@ def cross_checks(path: str, episodes: int, seed: int,
     if policy.env != "walk":
         raise ValueError(f"{path}: a {policy.env} run; sim2sim is for the walking task")
     walk = policy._core.walk_config
-    gaits = [e["gait"] for e in policy.evaluate(episodes, seed)["episodes"]]
+    evaluated = policy.evaluate(episodes, seed)["episodes"]
+    gaits = [e["gait"] for e in evaluated]
     ours = [g for g in gaits if g is not None]
+    ours_past = [_past_limit_deg(e["trace"]["joint_angle"], e["trace"]["joint_limits"])
+                 for e in evaluated if e.get("trace") is not None]
 
     def cls(g: Optional[Dict[str, Any]]) -> Optional[str]:
         return (g.get("cycle") or {}).get("gait_class") if g is not None else "fall"
@@ -421,14 +441,15 @@ def cross_checks(path: str, episodes: int, seed: int,
             continue
         done.add((cone, env.servo, limits))
         track = float(env.track)
-        mj = [metrics.gait_metrics(env.episode(policy, seed + k), track_length=track)
-              for k in range(episodes)]
+        traces = [env.episode(policy, seed + k) for k in range(episodes)]
+        mj = [metrics.gait_metrics(t, track_length=track) for t in traces]
+        mj_past = [_past_limit_deg(t["joint_angles"], t["joint_limits"]) for t in traces]
         out.append({
             "policy": os.fspath(path), "checkpoint": policy.checkpoint, "seed": seed,
             "episodes": episodes,
             "mujoco_settings": {"cone": cone, "servo": env.servo, "action": env.mode,
                                 "limits": limits},
-            "esrl": _summary(ours), "mujoco": _summary(mj),
+            "esrl": _summary(ours, ours_past), "mujoco": _summary(mj, mj_past),
             "per_episode": [{
                 "seed": seed + k, "esrl": cls(g), "mujoco": cls(m),
                 "esrl_finished": g is not None and g.get("track_time") is not None,
@@ -441,11 +462,13 @@ def _row(name: str, s: Dict[str, Any]) -> str:
     classes = ", ".join(f"{c} {n}" for c, n in s["classes"].items())
     tt = f"{s['track_time']:.1f}" if s["track_time"] is not None else "–"
     return (f"| {name} | {classes} | {s['finished']}/{s['episodes']} | {s['falls']} | "
-            f"{tt} | {s['speed']:.2f} | {s['sway']:.3f} | {100 * s['knee_asymmetry']:.1f} % |")
+            f"{tt} | {s['speed']:.2f} | {s['sway']:.3f} | {100 * s['knee_asymmetry']:.1f} % | "
+            f"{s['past_limit_deg']:.1f} |")
 
 
 _HEADER = ("| engine | gait classes | finished 50 m | falls | track time (s) | speed (m/s) | "
-           "sway (m) | knee asym. |\n|---|---|---:|---:|---:|---:|---:|---:|")
+           "sway (m) | knee asym. | past a limit (°) |\n"
+           "|---|---|---:|---:|---:|---:|---:|---:|---:|")
 
 
 def _table(r: Dict[str, Any]) -> str:
