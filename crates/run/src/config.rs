@@ -114,8 +114,8 @@ pub enum Preset {
     #[default]
     Walker,
     /// `walker` asking for a walk within 40 s: a 0.8 s gait clock, speed paid up to
-    /// 1.4 m/s and a stop at the first walk that reaches the line within 40 s from all 10
-    /// check starts and 19 of 20 (`results/clock-fast`).
+    /// 1.4 m/s, a stop at the first walk that reaches the line within 40 s from all 10
+    /// check starts and 19 of 20, and 5 M env steps (`results/clock-fast`).
     WalkerFast,
     /// Seconds: tiny budget and networks, for tests.
     Smoke,
@@ -636,11 +636,11 @@ impl TrainConfig {
 pub const TIME_WALKER: &str = "until the first walk: 5-23 min at --threads 2 on an idle 2-core machine (median over twenty seeds about 14.6 min, measured on the two median seeds: 14.6 min each; 19 of 20 walk); the whole 4 M env steps at most 26 min (measured on seed 1), 30 min when a run starts over and still finds no walk (5 M env steps; measured on seed 8)";
 /// `--preset walker-fast`'s time (until the first walk that reaches the line within 40 s from
 /// every check start) at `--threads 2` on an idle 2-core Intel Xeon (`results/clock-fast`,
-/// "Wall time at two threads"): seeds 8 and 0, which met the stop at 1.92 and 3.23 M env
-/// steps, measured; the range follows from the steps of the six of ten seeds that met it
-/// (1.92–3.60 M) at the rate measured (2,500 env steps/s); the whole budget measured on seed
-/// 10, which never met it.
-pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-24 min at --threads 2 on an idle 2-core machine (13 and 21 min measured on two seeds; 6 of 10 seeds get there), otherwise the whole 4 M env steps: 27 min (measured)";
+/// "Wall time at two threads" and "More budget"): seeds 8 and 0, which met the stop at 1.92
+/// and 3.23 M env steps, measured; the range follows from the steps of the eight of ten
+/// seeds that met it within the 5 M (1.92–4.52 M) at the rate measured (2,500 env steps/s);
+/// the whole budget from the 4 M measured on seed 10, which never met it (1,611 s), × 5/4.
+pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-30 min at --threads 2 on an idle 2-core machine (13 and 21 min measured on two seeds; 8 of 10 seeds get there), otherwise the whole 5 M env steps: about 34 min (27 min measured for 4 M)";
 /// `--preset walking-torque`'s time (until the first policy at the walking bar) at
 /// `--threads 2` on an idle 2-core Intel Xeon, measured on
 /// seeds 4, 1 and 5 of `results/torque`'s seed study (`results/speed`, "Time to walk of the
