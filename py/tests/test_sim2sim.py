@@ -153,8 +153,8 @@ def test_a_torque_policy_runs_once_per_cone(capsys) -> None:
 
 def test_stiff_limits_hold_the_joints_near_the_urdfs_limits(capsys) -> None:
     """Full torque driving both ankles into their −20° stops for 0.5 s: MuJoCo's default limit
-    lets them bend far past; the stiff one keeps them within 4° of the URDF's limit (Rapier's
-    hard limit keeps them at it). `--limits all` runs both, the stiff rows named."""
+    lets them bend far past; the stiff one keeps them within 4° of the URDF's limit. `--limits
+    all` runs both, the stiff rows named."""
     torque = FLAGSHIP.parents[1] / "torque" / "records" / "torque-s0" / "policy"
     walk = esrl_rs.load_policy(torque)._core.walk_config
     past = {}

@@ -39,9 +39,9 @@ pub struct TrainOptions {
     /// Named settings; a --config file and the flags below override them. `walker` (the
     /// default) is the recipe that walks on torque actions, stops at the first walk that
     /// finishes every check start and starts over from another seed when a run has not got
-    /// going; `walker-fast` the same asking for a walk within 40 s (a faster gait clock, 5 M env steps);
-    /// `walking-torque` the same without the stricter stop and the restart; `walking` the
-    /// recipe on joint-angle targets; `paper` the paper's literal §5 protocol.
+    /// going; `walker-fast` the same asking for a walk within 40 s (a faster gait clock, 5 M
+    /// env steps); `walking-torque` the same without the stricter stop and the restart;
+    /// `walking` the recipe on joint-angle targets; `paper` the paper's literal §5 protocol.
     #[arg(long, value_enum, default_value_t = Preset::Walker)]
     pub preset: Preset,
     /// TOML file overriding the preset (same keys as a run folder's config.toml).

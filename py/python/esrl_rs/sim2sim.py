@@ -513,8 +513,8 @@ def main(argv: Optional[List[str]] = None) -> int:
                     "both)")
     ap.add_argument("--limits", choices=LIMITS + ("all",), default="soft",
                     help="MuJoCo's joint limits: soft (the default, MuJoCo's own: torque can "
-                    "push a joint well past its limit), stiff (the stiffest MuJoCo allows, "
-                    "within about 2 degrees, as Rapier's hard limits) or all: both")
+                    "push a joint far past its limit), stiff (the stiffest MuJoCo allows: a few "
+                    "degrees past, as esrl's own limits) or all: both")
     ap.add_argument("--json", action="store_true", help="print the result as JSON")
     a = ap.parse_args(argv)
     try:
