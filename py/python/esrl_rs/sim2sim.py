@@ -34,10 +34,10 @@ shape of Rapier's, which caps the tangential impulse's magnitude), ``servo``
 and torque limit, their damping integrated implicitly as Rapier integrates its servo) and
 ``limits`` (:data:`LIMITS`). MuJoCo's default joint limit (``soft``: ``solref`` 0.02 s,
 ``solimp`` 0.9–0.95) is a spring that torque can push through: a torque policy pressing its
-joints into their stops bends them 14.5–31.3° past (``results/mujoco-limits``). ``stiff``
+joints into their stops bends them 13.5–34.9° past (``results/mujoco-limits``). ``stiff``
 is the stiffest limit MuJoCo's integrator allows at this step (``solref`` time constant two
-physics steps, ``solimp`` 0.99–0.999): 2.8–6.7° past under the same walks, as in esrl
-(Rapier: 2.3–5.7°). Every summary says how far the joints went
+physics steps, ``solimp`` 0.99–0.999): 2.5–7.2° past under the same walks, as in esrl
+(Rapier: 2.1–5.7°). Every summary says how far the joints went
 (``past_limit_deg``: the largest angle past a URDF limit over the episodes, any actuated
 joint), in both engines.
 """
