@@ -247,16 +247,7 @@ fn a_stopped_study_resumes_to_the_records_of_an_uninterrupted_one() {
 fn a_study_folder_holds_one_study_and_bad_files_are_named() {
     let tmp = tempfile::tempdir().unwrap();
     let study = write_study(tmp.path());
-    let out = tmp.path().join("out");
-    let other = tmp.path().join("other.toml");
-    std::fs::write(&other, STUDY.replace("seeds = 2", "seeds = 1")).unwrap();
-    ok(&[
-        "study",
-        "run",
-        other.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (_, out) = run_own_study(tmp.path(), &STUDY.replace("seeds = 2", "seeds = 1"));
     let err = fails(&["study", "run", &study, "--out", out.to_str().unwrap()]);
     assert!(err.contains("holds another study"), "{err}");
     let bad = tmp.path().join("bad.toml");

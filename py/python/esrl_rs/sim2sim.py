@@ -440,9 +440,11 @@ def cross_checks(path: str, episodes: int, seed: int,
             continue
         done.add((cone, env.servo, limits))
         track = float(env.track)
-        traces = [env.episode(policy, seed + k) for k in range(episodes)]
-        mj = [metrics.gait_metrics(t, track_length=track) for t in traces]
-        mj_past = [_past_limit_deg(t["joint_angles"], t["joint_limits"]) for t in traces]
+        mj, mj_past = [], []
+        for k in range(episodes):
+            t = env.episode(policy, seed + k)
+            mj.append(metrics.gait_metrics(t, track_length=track))
+            mj_past.append(_past_limit_deg(t["joint_angles"], t["joint_limits"]))
         out.append({
             "policy": os.fspath(path), "checkpoint": policy.checkpoint, "seed": seed,
             "episodes": episodes,
