@@ -640,7 +640,7 @@ pub const TIME_WALKER: &str = "until the first walk: 5-23 min at --threads 2 on 
 /// and 3.23 M env steps, measured; the range follows from the steps of the eight of ten
 /// seeds that met it within the 5 M (1.92–4.52 M) at the rate measured (2,500 env steps/s);
 /// the whole budget from the 4 M measured on seed 10, which never met it (1,611 s), × 5/4.
-pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-30 min at --threads 2 on an idle 2-core machine (13 and 21 min measured on two seeds; 8 of 10 seeds get there), otherwise the whole 5 M env steps: about 34 min (27 min measured for 4 M)";
+pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-30 min at --threads 2 on an idle 2-core machine (13-22 min measured on five seeds, median 19 min; 12 of 16 seeds get there), otherwise the whole 5 M env steps: 33 min (measured on seed 15)";
 /// `--preset walking-torque`'s time (until the first policy at the walking bar) at
 /// `--threads 2` on an idle 2-core Intel Xeon, measured on
 /// seeds 4, 1 and 5 of `results/torque`'s seed study (`results/speed`, "Time to walk of the
