@@ -19,13 +19,16 @@ runs a policy in both engines from the same starts and reports the gait metrics 
 **What matches and what cannot.** Masses, inertias, joint axes and limits, damping and
 friction come from the URDF in both; gravity, friction coefficient (1; MuJoCo takes the
 larger of two geoms' coefficients, Rapier their mean, equal here), time step and substeps are
-set alike. The contact models differ (Rapier: rigid contacts solved by impulses with one
-solver iteration per step; MuJoCo: soft contacts with its default solver reference and
-impedance), as do the joint-limit models (Rapier: a hard limit, with torques into it faded
-over the last 2° under ``fade``; MuJoCo: a soft limit constraint) and the servo (Rapier
-integrates it implicitly inside its solver; here it is an explicit torque per physics step,
-stable at these gains: ω = √(kp/I) ≈ 55 rad/s, ω·h ≈ 0.34). A policy that walks in both has
-learned a gait, not a solver artifact; one that walks in one only depends on what differs.
+set alike. The contact models differ (Rapier: contacts solved by impulses, one solver
+iteration per step, made soft as a spring of 60 Hz and damping ratio 10 that corrects
+penetrations beyond 5 mm (``physics.contact_frequency``); MuJoCo: soft contacts with its
+default solver reference and impedance), as do the joint-limit models (Rapier: a hard limit,
+with torques into it faded over the last 2° under ``fade``; MuJoCo: a soft limit constraint
+and the full torque; ``results/mujoco-limits`` tried the fade on MuJoCo's side too) and the
+servo (Rapier integrates it implicitly inside its solver; here it is an explicit torque per
+physics step, stable at these gains: ω = √(kp/I) ≈ 55 rad/s, ω·h ≈ 0.34). A policy that
+walks in both has learned a gait, not a solver artifact; one that walks in one only depends
+on what differs.
 
 Three of MuJoCo's own settings can be chosen, to see whether a result depends on them:
 ``cone`` (:data:`CONES`: MuJoCo's default ``pyramidal`` friction cone, or ``elliptic``, the
