@@ -636,10 +636,11 @@ impl TrainConfig {
 pub const TIME_WALKER: &str = "until the first walk: 5-23 min at --threads 2 on an idle 2-core machine (median over twenty seeds about 14.6 min, measured on the two median seeds: 14.6 min each; 19 of 20 walk); the whole 4 M env steps at most 26 min (measured on seed 1), 30 min when a run starts over and still finds no walk (5 M env steps; measured on seed 8)";
 /// `--preset walker-fast`'s time (until the first walk that reaches the line within 40 s from
 /// every check start) at `--threads 2` on an idle 2-core Intel Xeon (`results/clock-fast`,
-/// "Wall time at two threads" and "More budget"): seeds 8 and 0, which met the stop at 1.92
-/// and 3.23 M env steps, measured; the range follows from the steps of the eight of ten
-/// seeds that met it within the 5 M (1.92–4.52 M) at the rate measured (2,500 env steps/s);
-/// the whole budget from the 4 M measured on seed 10, which never met it (1,611 s), × 5/4.
+/// "Wall time at two threads" and "More budget"; `results/clock-fast/holdout`): seeds 8, 13,
+/// 14, 0 and 12, which met the stop at 1.92, 2.02, 2.90, 3.23 and 3.35 M env steps, measured
+/// (770, 813, 1,125, 1,258 and 1,322 s); the range follows from the steps of the twelve of
+/// sixteen seeds that met it within the 5 M (1.92–4.52 M) at the rate measured (2,490–2,590
+/// env steps/s); the whole budget measured on held-out seed 15, which never met it (1,976 s).
 pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-30 min at --threads 2 on an idle 2-core machine (13-22 min measured on five seeds, median 19 min; 12 of 16 seeds get there), otherwise the whole 5 M env steps: 33 min (measured on seed 15)";
 /// `--preset walking-torque`'s time (until the first policy at the walking bar) at
 /// `--threads 2` on an idle 2-core Intel Xeon, measured on
