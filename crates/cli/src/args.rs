@@ -181,6 +181,12 @@ pub struct EvalArgs {
     /// disturbs the plain task, as the robustness card does).
     #[arg(long)]
     pub undisturbed: bool,
+    /// What the observed torso orientation is measured against on a slope (`--perturb
+    /// slope=…`, the card's slopes): `ground` (the frame of the flat ground under tilted
+    /// gravity: the slope's tilt does not show) or `gravity` (as an IMU on a real slope
+    /// reports it). Default: the run's own (`walk.orientation_frame`, `ground` unless set).
+    #[arg(long, value_name = "FRAME", value_parser = ["ground", "gravity"])]
+    pub orientation_frame: Option<String>,
     /// Also run the robustness card: the policy under pushes, friction, mass, strength,
     /// slopes, noise and delay at several magnitudes, --episodes each (into the report's
     /// `robustness`).

@@ -10,6 +10,7 @@ use esrl_eval::{
 use esrl_metrics::{format_number, gait_classes_text, GaitCycle, GaitMetrics, JointMotion};
 use esrl_run::checkpoint::{BestInfo, BEST_INFO};
 use esrl_run::run_dir::{check_output, write_json_atomic};
+use esrl_sim::OrientationFrame;
 
 /// Runs `esrl eval`.
 pub fn run(args: &EvalArgs) -> Result<()> {
@@ -34,6 +35,14 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             eprintln!("without the run's training-time disturbances ([walk.perturb])");
         }
         loaded = loaded.undisturbed()?;
+    }
+    if let Some(frame) = &args.orientation_frame {
+        let mut walk = loaded.config.walk.clone();
+        walk.orientation_frame = match frame.as_str() {
+            "gravity" => OrientationFrame::Gravity,
+            _ => OrientationFrame::Ground,
+        };
+        loaded = loaded.with_walk(walk)?;
     }
     if !perturb.is_empty() {
         let mut walk = loaded.config.walk.clone();

@@ -2,7 +2,8 @@
 //! names (the report says which) and refuses unknown ones by name; `--robustness` adds the
 //! card: the undisturbed task and each disturbance of the standard set, in order;
 //! `--undisturbed` (and a study's `[eval] undisturbed = true`) evaluates a policy trained under
-//! disturbances on the plain task.
+//! disturbances on the plain task; `--orientation-frame gravity` observes a slope as an IMU on a
+//! real slope would, and changes nothing on flat ground.
 
 mod common;
 
@@ -200,4 +201,43 @@ set = { walk = { perturb = { obs_noise = 0.3, friction_range = [0.5, 1.0] } } }
         report.contains("on the plain task, without the runs' training-time disturbances"),
         "{report}"
     );
+}
+
+#[test]
+fn the_orientation_frame_matters_on_a_slope_only() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("run");
+    smoke("es-sac", &run, &["--generations", "1"]);
+    let eval = |extra: &[&str], name: &str| {
+        let out = tmp.path().join(name);
+        let mut args = vec![
+            "eval",
+            run.to_str().unwrap(),
+            "--episodes",
+            "2",
+            "--traces",
+            "0",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        ok(&args);
+        read_json(&out)
+    };
+    let flat = eval(&[], "flat.json");
+    let flat_gravity = eval(&["--orientation-frame", "gravity"], "flat-g.json");
+    assert!(
+        flat.get("orientation_frame").is_none(),
+        "ground is the default"
+    );
+    assert_eq!(flat_gravity["orientation_frame"], "gravity");
+    assert_eq!(flat["episodes"], flat_gravity["episodes"]);
+    let slope = eval(&["--perturb", "slope=-5"], "slope.json");
+    let slope_gravity = eval(
+        &["--perturb", "slope=-5", "--orientation-frame", "gravity"],
+        "slope-g.json",
+    );
+    assert_ne!(slope["episodes"], slope_gravity["episodes"]);
+    let err = fails(&["eval", run.to_str().unwrap(), "--orientation-frame", "up"]);
+    assert!(err.contains("ground") && err.contains("gravity"), "{err}");
 }

@@ -220,6 +220,10 @@ pub struct EvalReport {
     /// (`[walk.perturb]`; `esrl eval --undisturbed`), `perturb` then added to the plain task.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub undisturbed: bool,
+    /// What the observed torso orientation was measured against on slopes
+    /// (`walk.orientation_frame`, or `esrl eval --orientation-frame`); absent: `ground`.
+    #[serde(default, skip_serializing_if = "esrl_sim::OrientationFrame::is_ground")]
+    pub orientation_frame: esrl_sim::OrientationFrame,
     /// The robustness card (`esrl eval --robustness`): the policy under each disturbance of
     /// the standard set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -319,6 +323,7 @@ pub fn evaluate_with(
         mean,
         perturb: Vec::new(),
         undisturbed: false,
+        orientation_frame: loaded.config.walk.orientation_frame,
         robustness: None,
     })
 }

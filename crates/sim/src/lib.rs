@@ -263,6 +263,7 @@ pub use model::{
 pub use pendulum::Pendulum;
 pub use sim::{Base, LimitModel, PhysicsConfig, RobotSim, RobotState, SimSetup};
 pub use walk::{
-    ActionMode, FallConfig, GaitClock, InitNoise, Mirror, ObsLayout, Perturb, PushDirection,
-    ResetConfig, ResetPose, RewardConfig, TargetServo, UprightGate, WalkConfig, WalkEnv,
+    ActionMode, FallConfig, GaitClock, InitNoise, Mirror, ObsLayout, OrientationFrame, Perturb,
+    PushDirection, ResetConfig, ResetPose, RewardConfig, TargetServo, UprightGate, WalkConfig,
+    WalkEnv,
 };

@@ -367,3 +367,78 @@ fn randomised_episodes_draw_their_slope_in_degrees_from_the_range() {
         "the same seed draws the same slope"
     );
 }
+
+/// `R(q)ᵀ·v` for the unit quaternion `q = (x, y, z, w)`: `v` in the frame `q` rotates into.
+fn rotate_back(q: &[f32], v: [f64; 3]) -> [f64; 3] {
+    let u = [-f64::from(q[0]), -f64::from(q[1]), -f64::from(q[2])];
+    let w = f64::from(q[3]);
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let uv = cross(u, v);
+    let uuv = cross(u, uv);
+    [0, 1, 2].map(|k| v[k] + 2.0 * w * uv[k] + 2.0 * uuv[k])
+}
+
+/// The walking task on a slope of `deg` degrees, its torso orientation observed in `frame`.
+fn on_slope(deg: f32, frame: esrl_sim::OrientationFrame) -> WalkEnv {
+    let mut cfg = WalkConfig {
+        orientation_frame: frame,
+        ..WalkConfig::default()
+    };
+    cfg.physics.slope = deg.to_radians();
+    WalkEnv::new(cfg).unwrap()
+}
+
+#[test]
+fn in_gravitys_frame_the_observed_orientation_points_at_gravity_as_an_imu_on_a_slope_does() {
+    use esrl_sim::OrientationFrame::{Gravity, Ground};
+    for deg in [-5.0f32, 3.0] {
+        let s = f64::from(deg.to_radians());
+        let (mut ground, mut gravity) = (on_slope(deg, Ground), on_slope(deg, Gravity));
+        let o = ground.obs_layout().orientation.clone();
+        let actions = [0.3f32, -0.2, 0.1, -0.4, 0.5, -0.1];
+        let (mut a, mut b) = (ground.reset(7), gravity.reset(7));
+        for step in 0..30 {
+            // Gravity in the torso's frame: from the ground-frame orientation and the tilted
+            // gravity g·(−sin s, 0, −cos s), and from the gravity-frame one and (0, 0, −g).
+            let want = rotate_back(&a[o.clone()], [-s.sin(), 0.0, -s.cos()]);
+            let got = rotate_back(&b[o.clone()], [0.0, 0.0, -1.0]);
+            for k in 0..3 {
+                assert!(
+                    (want[k] - got[k]).abs() < 1e-6,
+                    "{deg}°, step {step}: gravity in the torso frame {got:?}, want {want:?}"
+                );
+            }
+            // Upright against the ground is leaning by the slope against gravity.
+            if step == 0 {
+                assert!((got[0] + s.sin()).abs() < 0.05, "{deg}°: {got:?}");
+            }
+            // Every other entry is the same bit for bit.
+            let rest = |v: &[f32]| [&v[..o.start], &v[o.end..]].concat();
+            assert_eq!(rest(&a), rest(&b), "{deg}°, step {step}");
+            a = ground.step(&actions).obs;
+            b = gravity.step(&actions).obs;
+        }
+    }
+}
+
+#[test]
+fn on_flat_ground_both_orientation_frames_observe_the_same_bits() {
+    use esrl_sim::OrientationFrame::{Gravity, Ground};
+    let (mut ground, mut gravity) = (on_slope(0.0, Ground), on_slope(0.0, Gravity));
+    assert_eq!(ground.reset(3), gravity.reset(3));
+    for k in 0..40 {
+        let x = k as f32 * 0.1;
+        let action = [x.sin(), x.cos(), -x.sin(), 0.5, -0.5, 0.2];
+        assert_eq!(
+            ground.step(&action).obs,
+            gravity.step(&action).obs,
+            "step {k}"
+        );
+    }
+}

@@ -175,6 +175,30 @@ pub enum ActionMode {
     Target,
 }
 
+/// What the torso orientation of the observation is measured against
+/// ([`WalkConfig::orientation_frame`]). The two differ only on a slope
+/// ([`PhysicsConfig::slope`](crate::PhysicsConfig::slope), `perturb.slope_range`), which tilts
+/// gravity over flat ground.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OrientationFrame {
+    /// The ground's frame (x along the track, z normal to the ground): on a slope, a robot
+    /// upright against gravity reads as leaning by the slope's angle, and one upright against
+    /// the ground as upright.
+    #[default]
+    Ground,
+    /// Gravity's frame, as an IMU on a real slope reports it: the ground's frame turned by the
+    /// slope about the lateral axis, so a robot upright against gravity reads as upright.
+    Gravity,
+}
+
+impl OrientationFrame {
+    /// Whether this is the default, [`OrientationFrame::Ground`].
+    pub fn is_ground(&self) -> bool {
+        *self == Self::Ground
+    }
+}
+
 /// The `target` action mode's servos ([`WalkConfig::target`]): their gains and the span of
 /// the targets the actions address.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -553,6 +577,11 @@ pub struct WalkConfig {
     /// Disturbances for robustness tests ([`Perturb`]). Default none.
     #[serde(skip_serializing_if = "Perturb::is_none")]
     pub perturb: Perturb,
+    /// What the observed torso orientation is measured against on a slope: `ground`
+    /// (default, every result before 2026-12-06) or `gravity` (as an IMU on a real slope
+    /// reports it). The same bit for bit on flat ground ([`OrientationFrame`]).
+    #[serde(skip_serializing_if = "OrientationFrame::is_ground")]
+    pub orientation_frame: OrientationFrame,
 }
 
 impl Default for WalkConfig {
@@ -592,6 +621,7 @@ impl Default for WalkConfig {
             foot_links: ["left_foot".into(), "right_foot".into()],
             standing_pose,
             perturb: Perturb::default(),
+            orientation_frame: OrientationFrame::Ground,
         }
     }
 }

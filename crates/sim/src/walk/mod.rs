@@ -10,7 +10,7 @@
 //! |---|---|---|
 //! | 0 | 1 | torso height error `z − z_stand`, m |
 //! | 1 | 1 | torso lateral offset `y` from the track centre line, m |
-//! | 2–5 | 4 | torso orientation quaternion `x, y, z, w` (world) |
+//! | 2–5 | 4 | torso orientation quaternion `x, y, z, w` (world; on a slope, see [`WalkConfig::orientation_frame`]) |
 //! | 6–8 | 3 | torso linear velocity (of the link origin), body frame, m/s |
 //! | 9–11 | 3 | torso angular velocity, body frame, rad/s |
 //! | 12–14 | 3 | torso linear acceleration, body frame, m/s² (finite difference of the world velocity over the control period, gravity not included; 0 after reset) |
@@ -150,8 +150,8 @@ use rand_chacha::ChaCha8Rng;
 use rapier3d::prelude::Vector;
 
 pub use config::{
-    ActionMode, FallConfig, GaitClock, InitNoise, Perturb, PushDirection, ResetConfig, ResetPose,
-    RewardConfig, TargetServo, UprightGate, WalkConfig,
+    ActionMode, FallConfig, GaitClock, InitNoise, OrientationFrame, Perturb, PushDirection,
+    ResetConfig, ResetPose, RewardConfig, TargetServo, UprightGate, WalkConfig,
 };
 pub use mirror::Mirror;
 pub use observation::ObsLayout;

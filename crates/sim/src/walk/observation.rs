@@ -3,9 +3,10 @@
 
 use std::ops::Range;
 
-use rapier3d::prelude::Vector;
+use rapier3d::prelude::{Rotation, Vector};
 use serde::Serialize;
 
+use super::OrientationFrame;
 use crate::model::RobotModel;
 use crate::sim::RobotSim;
 
@@ -26,6 +27,8 @@ pub(super) struct Sources<'a> {
     pub(super) weight: f32,
     /// Per-index factor.
     pub(super) scale: &'a [f32],
+    /// What the torso orientation is measured against.
+    pub(super) orientation_frame: OrientationFrame,
 }
 
 /// Index ranges of the observation vector (see the module docs for units and frames).
@@ -132,7 +135,7 @@ pub(super) fn observe(
     let v = inv * sim.link_origin_velocity(s.torso);
     let w = inv * sim.link_angular_velocity(s.torso);
     let a = inv * acceleration;
-    let q = pose.rotation;
+    let q = observed_orientation(s.orientation_frame, sim, pose.rotation);
     let mut obs = Vec::with_capacity(s.scale.len());
     obs.push(pose.translation.z - s.standing_height as f32);
     obs.push(pose.translation.y);
@@ -158,6 +161,23 @@ pub(super) fn observe(
         *o *= f;
     }
     obs
+}
+
+/// The torso orientation `q` (in the ground's frame, the simulation's world) as the
+/// observation reports it: unchanged in the ground's frame or on flat ground; in gravity's
+/// frame on a slope `s` (gravity `g·(−sin s, 0, −cos s)`), turned by `−s` about the lateral
+/// axis, the rotation that takes the tilted gravity to `(0, 0, −g)`.
+pub(super) fn observed_orientation(
+    frame: OrientationFrame,
+    sim: &RobotSim,
+    q: Rotation,
+) -> Rotation {
+    let g = sim.world().gravity;
+    if frame == OrientationFrame::Ground || g.x == 0.0 {
+        return q;
+    }
+    let slope = (-g.x).atan2(-g.z);
+    Rotation::from_rotation_y(-slope) * q
 }
 
 /// A name for every observation index, e.g. `joint_angle/left_knee`; `clock` adds the gait

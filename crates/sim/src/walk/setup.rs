@@ -141,6 +141,7 @@ impl WalkShared {
             feet: self.feet,
             weight: self.weight,
             scale: &self.obs_scale,
+            orientation_frame: self.config.orientation_frame,
         }
     }
 
