@@ -167,6 +167,53 @@ fn the_capped_forward_term_pays_speed_up_to_the_cap() {
 }
 
 #[test]
+fn speed_above_the_cap_costs_what_forward_over_cap_asks() {
+    let action = [0.3, 0.2, -0.6, 0.3, 0.2, -0.6];
+    let (cap, k) = (0.05f32, 1.5f32);
+    let mut config = WalkConfig::default();
+    config.reward.forward = 2.0;
+    config.reward.forward_cap = Some(cap);
+    config.reward.forward_over_cap = k;
+    let mut plain = config.clone();
+    plain.reward.forward_over_cap = 0.0;
+    let (mut env, mut free) = (
+        WalkEnv::new(config.clone()).unwrap(),
+        WalkEnv::new(plain).unwrap(),
+    );
+    env.reset(2);
+    free.reset(2);
+    let (mut above, mut below) = (0, 0);
+    for _ in 0..60 {
+        let (s, f0) = (env.step(&action), free.step(&action));
+        let (f, v) = (term(&s, "forward").unwrap(), gait(&s).forward_velocity);
+        // The same motion: only the forward term differs, and only above the cap.
+        assert_eq!(v, gait(&f0).forward_velocity);
+        if v > cap {
+            // 2·(c − k·(v − c)), by hand.
+            let want = 2.0 * (cap - k * (v - cap));
+            assert!(
+                (f - want).abs() <= 1e-6 * want.abs().max(1.0),
+                "vx {v}: {f} vs {want}"
+            );
+            assert!(f < term(&f0, "forward").unwrap());
+            above += 1;
+        } else {
+            assert_eq!(f, term(&f0, "forward").unwrap());
+            below += 1;
+        }
+        if s.terminated {
+            break;
+        }
+    }
+    assert!(above > 0 && below > 0, "above {above}, below {below}");
+    config.reward.forward_cap = None;
+    let e = WalkEnv::new(config)
+        .err()
+        .expect("a price without a cap is refused");
+    assert!(e.to_string().contains("reward.forward_over_cap"), "{e}");
+}
+
+#[test]
 fn the_episode_ends_off_course_past_the_lateral_limit() {
     let mut config = WalkConfig::default();
     let max = 0.005;

@@ -48,6 +48,12 @@ pub struct RewardConfig {
     /// none (eq. 12 pays any speed).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub forward_cap: Option<f32>,
+    /// With [`RewardConfig::forward_cap`] `c`, the price `k` of each m/s above it: `forward`
+    /// pays `w_v·(min(vx, c) − k·max(vx − c, 0))`, so with `k > 0` the most it pays is at the
+    /// cap and speed beyond costs (a walk sped up by a descent is paid to brake). Default 0
+    /// (speed above the cap neither pays nor costs).
+    #[serde(skip_serializing_if = "crate::sim::is_zero")]
+    pub forward_over_cap: f32,
 }
 
 impl Default for RewardConfig {
@@ -62,6 +68,7 @@ impl Default for RewardConfig {
             torque_sq: 0.0,
             forward_gate: None,
             forward_cap: None,
+            forward_over_cap: 0.0,
         }
     }
 }
@@ -679,6 +686,14 @@ impl WalkConfig {
         nonneg("reward.torque_sq", self.reward.torque_sq)?;
         if let Some(c) = self.reward.forward_cap {
             pos("reward.forward_cap", c)?;
+        }
+        nonneg("reward.forward_over_cap", self.reward.forward_over_cap)?;
+        if self.reward.forward_over_cap > 0.0 && self.reward.forward_cap.is_none() {
+            return Err(config_err(
+                "reward.forward_over_cap",
+                self.reward.forward_over_cap,
+                "prices speed above reward.forward_cap, which is not set",
+            ));
         }
         if let Some(g) = &self.reward.forward_gate {
             pos("reward.forward_gate.max_tilt", g.max_tilt)?;

@@ -106,7 +106,8 @@
 //!   standing height (DeepMind Control's walker pays its move reward only in proportion to
 //!   its stand reward);
 //! - `reward.forward_cap = c`: `forward` pays `w_v·min(vx, c)`, no reward for speed above `c`
-//!   m/s (for a track that goes on past its line, where every extra m/s would pay).
+//!   m/s (for a track that goes on past its line, where every extra m/s would pay);
+//!   `reward.forward_over_cap = k` makes each m/s above `c` cost `w_v·k`.
 //!
 //! # Episode
 //!

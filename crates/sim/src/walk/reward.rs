@@ -113,7 +113,14 @@ pub(super) fn step_outcome(
         (
             "forward",
             if upright {
-                w.forward * w.forward_cap.map_or(vx, |c| vx.min(c))
+                w.forward
+                    * w.forward_cap.map_or(vx, |c| {
+                        if w.forward_over_cap > 0.0 && vx > c {
+                            c - w.forward_over_cap * (vx - c)
+                        } else {
+                            vx.min(c)
+                        }
+                    })
             } else {
                 0.0
             },
