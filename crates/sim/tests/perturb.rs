@@ -5,7 +5,9 @@
 //! the joints the action of d steps before; `obs_noise` adds noise of the given spread that
 //! repeats with the seed; pushes come every `push_every` s and move the torso by about the
 //! push; a softer ground contact (`contact_frequency`) lets a standing robot sink by about
-//! g/ω². With no disturbance the environment is what it was.
+//! g/ω². With no disturbance the environment is what it was. On a slope, the orientation
+//! observed in gravity's frame (`walk.orientation_frame = "gravity"`) points at the tilted
+//! gravity as an IMU would; on flat ground both frames observe the same bits.
 
 use std::sync::Arc;
 

@@ -167,11 +167,7 @@ pub(super) fn observe(
 /// observation reports it: unchanged in the ground's frame or on flat ground; in gravity's
 /// frame on a slope `s` (gravity `g·(−sin s, 0, −cos s)`), turned by `−s` about the lateral
 /// axis, the rotation that takes the tilted gravity to `(0, 0, −g)`.
-pub(super) fn observed_orientation(
-    frame: OrientationFrame,
-    sim: &RobotSim,
-    q: Rotation,
-) -> Rotation {
+fn observed_orientation(frame: OrientationFrame, sim: &RobotSim, q: Rotation) -> Rotation {
     let g = sim.world().gravity;
     if frame == OrientationFrame::Ground || g.x == 0.0 {
         return q;
