@@ -7,7 +7,26 @@
 
 mod common;
 
+use std::path::Path;
+
 use common::{fails, ok, read_json, smoke};
+
+/// `esrl eval POLICY --episodes 2 --traces 0 --out OUT EXTRA…`, and the report it wrote.
+fn eval_json(policy: &Path, extra: &[&str], out: &Path) -> serde_json::Value {
+    let mut args = vec![
+        "eval",
+        policy.to_str().unwrap(),
+        "--episodes",
+        "2",
+        "--traces",
+        "0",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    ok(&args);
+    read_json(out)
+}
 
 #[test]
 fn perturbed_evaluations_and_the_card() {
@@ -102,22 +121,8 @@ fn undisturbed_evaluates_a_randomized_policy_on_the_plain_task() {
     );
     std::fs::write(plain.join("config.toml"), toml::to_string(&table).unwrap()).unwrap();
 
-    let eval = |dir: &std::path::Path, extra: &[&str], name: &str| {
-        let out = tmp.path().join(name);
-        let mut args = vec![
-            "eval",
-            dir.to_str().unwrap(),
-            "--episodes",
-            "2",
-            "--traces",
-            "0",
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend(extra);
-        ok(&args);
-        read_json(&out)
-    };
+    let eval =
+        |dir: &Path, extra: &[&str], name: &str| eval_json(dir, extra, &tmp.path().join(name));
     let undisturbed = eval(&noisy, &["--undisturbed"], "u.json");
     let reference = eval(&plain, &[], "p.json");
     let disturbed = eval(&noisy, &[], "d.json");
@@ -161,22 +166,9 @@ set = { walk = { perturb = { obs_noise = 0.3, friction_range = [0.5, 1.0] } } }
     assert_eq!(recorded["undisturbed"], true);
     let policy = record.join("policy");
     let eval = |extra: &[&str], name: &str| {
-        let o = tmp.path().join(name);
-        let mut args = vec![
-            "eval",
-            policy.to_str().unwrap(),
-            "--episodes",
-            "2",
-            "--seed",
-            "1000",
-            "--traces",
-            "0",
-            "--out",
-            o.to_str().unwrap(),
-        ];
+        let mut args = vec!["--seed", "1000"];
         args.extend(extra);
-        ok(&args);
-        read_json(&o)
+        eval_json(&policy, &args, &tmp.path().join(name))
     };
     // The episodes without q0 (the record's policy folder holds the actor alone).
     let episodes = |report: serde_json::Value| {
@@ -208,22 +200,7 @@ fn the_orientation_frame_matters_on_a_slope_only() {
     let tmp = tempfile::tempdir().unwrap();
     let run = tmp.path().join("run");
     smoke("es-sac", &run, &["--generations", "1"]);
-    let eval = |extra: &[&str], name: &str| {
-        let out = tmp.path().join(name);
-        let mut args = vec![
-            "eval",
-            run.to_str().unwrap(),
-            "--episodes",
-            "2",
-            "--traces",
-            "0",
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend(extra);
-        ok(&args);
-        read_json(&out)
-    };
+    let eval = |extra: &[&str], name: &str| eval_json(&run, extra, &tmp.path().join(name));
     let flat = eval(&[], "flat.json");
     let flat_gravity = eval(&["--orientation-frame", "gravity"], "flat-g.json");
     assert!(
