@@ -82,7 +82,18 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
         .map(|s| format!(", at most {s} env steps"))
         .unwrap_or_default();
     let typical = cfg.typical_time().map_or(String::new(), |t| {
-        format!("\n  typical: {t} (the preset's whole budget)")
+        let changed = cfg.changed_from_preset();
+        if changed.is_empty() {
+            format!("\n  typical: {t} (the preset's whole budget)")
+        } else {
+            // Measured times are the preset's as it comes; a fine-tuning run or a changed
+            // budget or task takes its own (its pace follows after the first generations).
+            format!(
+                "\n  typical: not measured for this run, which changes {}; the preset as it \
+                 comes: {t}",
+                changed.join(", ")
+            )
+        }
     });
     let restart = cfg.restart.as_ref().map_or(String::new(), |r| {
         format!(

@@ -409,6 +409,23 @@ impl TrainConfig {
         }
     }
 
+    /// The settings this config changes from its preset as it comes, as dotted keys (the
+    /// seed, the thread count and `--until` aside, which the preset's measured times cover):
+    /// empty for the runs [`TrainConfig::typical_time`] was measured on; `max_env_steps`,
+    /// `init`, `walk.perturb.slope_range`, … after `--steps`, `--init` or a `--config` file.
+    pub fn changed_from_preset(&self) -> Vec<String> {
+        let mut preset = Self::preset(self.agent, self.env, self.preset);
+        preset.seed = self.seed;
+        preset.stop_at_walk = self.stop_at_walk;
+        config_differences(&preset, self)
+            .map(|d| {
+                d.into_iter()
+                    .map(|line| line.split(':').next().unwrap_or_default().to_string())
+                    .collect()
+            })
+            .unwrap_or_else(|_| vec!["(the settings could not be compared)".into()])
+    }
+
     /// Applies the flags a resumed run may change too: `--generations`, `--episodes`,
     /// `--steps`, `--threads` and `--until`.
     pub fn apply_budget(&mut self, opts: &Overrides) {

@@ -47,3 +47,46 @@ fn every_preset_resolves_to_its_snapshot() {
     }
     assert!(differ.is_empty(), "presets changed:\n{}", differ.join("\n"));
 }
+
+/// The banner's typical time is the preset's as it comes: a run that changes its budget, its
+/// start or its task is told so, with the keys it changes; the seed, the threads, `--until`
+/// and a run's own `config.toml` change nothing.
+#[test]
+fn what_a_run_changes_from_its_preset_is_named() {
+    use esrl_run::Overrides;
+    let resolve = |o: Overrides| TrainConfig::resolve(AgentKind::EsSac, &o, Some(5)).unwrap();
+    let plain = resolve(Overrides {
+        threads: Some(2),
+        stop_at_walk: Some(false),
+        ..Overrides::default()
+    });
+    assert_eq!(plain.changed_from_preset(), Vec::<String>::new());
+
+    let steps = resolve(Overrides {
+        steps: Some(1_500_000),
+        ..Overrides::default()
+    });
+    assert_eq!(steps.changed_from_preset(), ["max_env_steps"]);
+
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("downhill.toml");
+    std::fs::write(&file, "[walk.perturb]\nslope_range = [-8.0, 0.0]\n").unwrap();
+    let task = resolve(Overrides {
+        config: Some(file),
+        ..Overrides::default()
+    });
+    let changed = task.changed_from_preset();
+    assert!(
+        !changed.is_empty() && changed.iter().all(|k| k.starts_with("walk.perturb")),
+        "{changed:?}"
+    );
+
+    // A run's own config.toml, given back as --config, is the preset as it comes.
+    let own = tmp.path().join("config.toml");
+    std::fs::write(&own, plain.to_toml().unwrap()).unwrap();
+    let again = resolve(Overrides {
+        config: Some(own),
+        ..Overrides::default()
+    });
+    assert_eq!(again.changed_from_preset(), Vec::<String>::new());
+}
