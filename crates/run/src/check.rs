@@ -30,6 +30,16 @@
 //! reach the line within `T` seconds count as finished for the bar; the reported counts and
 //! the ranking's shares are unchanged.
 //!
+//! **The first walk of a run that asks for speed** ([`Checker::check_seeking`]). With a
+//! margin of speed, the run's bar comes later than the first walk a user could have: a walk
+//! that reaches the line within the episode but not within `T`. Until a run has found one,
+//! its checks also judge the bar without the margin ([`CheckResult::walking`]): on the same
+//! starts and confirmation starts, each start run once, the ones the check itself stopped
+//! before run for the verdict (stopping, with `stop_early`, once that bar is out of reach
+//! too). The check's own counts, rank and bar are what they are without the verdict, so the
+//! policy `RUN/best/` keeps and the stop do not change; its seconds include the verdict's
+//! episodes.
+//!
 //! **Choosing the kept policy.** Checks are ranked by ([`CheckResult::score`]): at the bar
 //! first, then the share of starts finished, then fewer falls (as a share), then the share
 //! classified `walk`, then mean distance (shares, so a confirmed check of `starts + m`
@@ -205,6 +215,11 @@ pub struct CheckResult {
     pub track_time: Option<f64>,
     /// Whether the policy meets the walking bar.
     pub at_bar: bool,
+    /// Whether it meets the walking bar without [`CheckConfig::max_track_time`]'s margin,
+    /// on all its starts, confirmation included: judged only while a run with that margin
+    /// seeks its first walk ([`Checker::check_seeking`]); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub walking: Option<bool>,
     /// Environment steps of the episodes the result counts (a stopped check's skipped and
     /// discarded starts are not).
     pub check_steps: u64,
@@ -266,7 +281,11 @@ impl CheckResult {
             self.starts,
             self.falls,
             self.mean_forward_velocity,
-            if self.at_bar { " (at the bar)" } else { "" },
+            match (self.at_bar, self.walking) {
+                (true, _) => " (at the bar)",
+                (false, Some(true)) => " (at the bar without the margin of speed)",
+                _ => "",
+            },
             if self.stopped {
                 " (stopped: the bar out of reach)"
             } else {
@@ -314,14 +333,57 @@ impl Checker {
         may_stop: bool,
         kept: Option<&CheckResult>,
     ) -> Result<CheckResult> {
+        self.check_seeking(agent, may_stop, kept, false)
+    }
+
+    /// [`Checker::check`], and with `seeking` (the run has not found its first walk yet)
+    /// and a [`CheckConfig::max_track_time`], the verdict [`CheckResult::walking`] on the bar
+    /// without that margin (module docs, "The first walk of a run that asks for speed").
+    pub fn check_seeking(
+        &self,
+        agent: &Agent,
+        may_stop: bool,
+        kept: Option<&CheckResult>,
+        seeking: bool,
+    ) -> Result<CheckResult> {
         let (starts, confirm) = (self.config.starts, self.config.confirm_starts);
         let stop = self.config.stop_early && may_stop;
         let mut episodes = Vec::new();
         let first = self.run_phase(agent, 0..starts, &mut episodes, stop, kept)?;
-        if !first.at_bar || confirm == 0 {
-            return Ok(first);
+        let mut result = if !first.at_bar || confirm == 0 {
+            first
+        } else {
+            self.run_phase(agent, starts..starts + confirm, &mut episodes, stop, kept)?
+        };
+        if seeking && self.config.max_track_time.is_some() {
+            result.walking = Some(self.walking(agent, episodes, stop)?);
         }
-        self.run_phase(agent, starts..starts + confirm, &mut episodes, stop, kept)
+        Ok(result)
+    }
+
+    /// Whether the policy meets the bar without the margin of speed, on its starts and (when
+    /// it does on those) its confirmation's, given the `episodes` a check of it ran (in start
+    /// order); the starts the check did not run are run here, stopping once that bar is out
+    /// of reach when `stop`.
+    fn walking(&self, agent: &Agent, mut episodes: Vec<Start>, stop: bool) -> Result<bool> {
+        let untimed = Checker {
+            config: CheckConfig {
+                max_track_time: None,
+                ..self.config.clone()
+            },
+            ..self.clone()
+        };
+        let (starts, confirm) = (self.config.starts, self.config.confirm_starts);
+        let confirming = episodes.split_off(episodes.len().min(starts));
+        let stopped = untimed.run_starts(agent, episodes.len()..starts, &mut episodes, stop)?;
+        let first = judge(&untimed.config, &episodes, 0, stopped);
+        if !first.at_bar || confirm == 0 {
+            return Ok(first.at_bar);
+        }
+        episodes.extend(confirming);
+        let ks = episodes.len()..starts + confirm;
+        let stopped = untimed.run_starts(agent, ks, &mut episodes, stop)?;
+        Ok(judge(&untimed.config, &episodes, confirm, stopped).at_bar)
     }
 
     /// Runs the phase `ks` of a check (its first starts, or the confirmation's) after the
@@ -496,6 +558,7 @@ fn judge(config: &CheckConfig, episodes: &[Start], confirm: usize, stopped: bool
         at_bar: !stopped
             && in_time as f64 >= config.finish_share * n - 1e-9
             && walks as f64 > config.walk_share * n,
+        walking: None,
         check_steps: episodes.iter().map(|e| e.steps).sum(),
         stopped,
         completed: false,
@@ -771,6 +834,11 @@ pub struct CheckState {
     pub kept: Option<CheckRecord>,
     /// The first check that met the walking bar.
     pub first_walk: Option<CheckRecord>,
+    /// With [`CheckConfig::max_track_time`], the first check that met the walking bar
+    /// without that margin ([`CheckResult::walking`], or the bar itself), whose policy
+    /// `RUN/first-walk/` holds. Absent without the margin (then it is `first_walk`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub first_any_walk: Option<CheckRecord>,
     /// The longest mean distance of a check so far, metres (`[restart]` judges it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub best_distance: Option<f64>,
@@ -778,13 +846,18 @@ pub struct CheckState {
 
 impl CheckState {
     /// Figures for `summary.json`: `steps_to_walk`, `time_to_walk_s` and `row_to_walk` (the
-    /// first policy at the bar; absent before one), `checks`, `check_s`, `check_env_steps`.
+    /// first policy at the bar; absent before one), `steps_to_any_walk` and
+    /// `time_to_any_walk_s` (the first at the bar without the margin of speed; only with
+    /// one), `checks`, `check_s`, `check_env_steps`.
     pub fn figures(&self) -> Vec<(&'static str, Option<f64>)> {
         let first = self.first_walk.as_ref();
+        let any = self.first_any_walk.as_ref();
         vec![
             ("steps_to_walk", first.map(|r| r.env_steps as f64)),
             ("time_to_walk_s", first.map(|r| r.wall_s)),
             ("row_to_walk", first.map(|r| r.row as f64)),
+            ("steps_to_any_walk", any.map(|r| r.env_steps as f64)),
+            ("time_to_any_walk_s", any.map(|r| r.wall_s)),
             ("checks", Some(self.records as f64)),
             ("check_s", Some(self.seconds)),
             ("check_env_steps", Some(self.env_steps as f64)),

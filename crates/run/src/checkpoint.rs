@@ -326,12 +326,27 @@ pub struct BestInfo {
 /// the run's `config.toml`, a `manifest.json` of their SHA-256), written to `best.tmp/` and
 /// swapped in like one. It is not a point to resume from.
 pub fn save_best(run: &Path, cfg: &TrainConfig, agent: &Agent, info: &BestInfo) -> Result<()> {
-    let tmp = fresh_dir(&run.join("best.tmp"))?;
+    save_policy(run, BEST, cfg, agent, info)
+}
+
+/// The folder of the first walk of a run that asks for speed (`check.max_track_time`): the
+/// first policy at the walking bar without that margin, in [`save_best`]'s layout.
+pub const FIRST_WALK: &str = "first-walk";
+
+/// Writes `agent` as a policy folder `RUN/<name>/` in [`save_best`]'s layout.
+pub fn save_policy(
+    run: &Path,
+    name: &str,
+    cfg: &TrainConfig,
+    agent: &Agent,
+    info: &BestInfo,
+) -> Result<()> {
+    let tmp = fresh_dir(&run.join(format!("{name}.tmp")))?;
     write_agent(&tmp, agent.state_tensors(), agent)?;
     write_json_atomic(&tmp.join(BEST_INFO), info)?;
     write_atomic(&tmp.join("config.toml"), cfg.to_toml()?.as_bytes())?;
     write_manifest(&tmp, &BEST_MANIFEST_FILES)?;
-    swap_in(&tmp, &run.join(BEST), &run.join("best.old"))
+    swap_in(&tmp, &run.join(name), &run.join(format!("{name}.old")))
 }
 
 /// The folder of [`snapshot_best`] at `steps` environment steps: `best-2M`, `best-500k`,

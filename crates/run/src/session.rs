@@ -233,6 +233,12 @@ impl Session {
         each!(&self.training, t => t.first_walk())
     }
 
+    /// [`Training::first_any_walk`]: with a margin of speed, the first check at the bar
+    /// without it.
+    pub fn first_any_walk(&self) -> Option<&CheckRecord> {
+        each!(&self.training, t => t.first_any_walk())
+    }
+
     /// [`Training::kept_check`]: the walking check of the policy `RUN/best/` holds.
     pub fn kept_check(&self) -> Option<&CheckRecord> {
         each!(&self.training, t => t.kept_check())

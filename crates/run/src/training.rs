@@ -5,7 +5,7 @@
 //! decides when to stop and what to print.
 
 use crate::check::{CheckRecord, CheckState, Checker, Trigger};
-use crate::checkpoint::{self, BestInfo, RunState};
+use crate::checkpoint::{self, BestInfo, RunState, FIRST_WALK};
 use crate::config::{EnvKind, TrainConfig};
 use crate::error::{Context, Error, Result};
 use crate::restart::{self, Restart};
@@ -131,6 +131,9 @@ struct Due {
     /// runs: checks are recorded in order). A check that stops but ranks above it runs in
     /// full ([`crate::check`] module docs, "Stopping early").
     kept: Option<crate::check::CheckResult>,
+    /// Whether the run still seeks its first walk without the margin of speed
+    /// ([`crate::check::Checker::check_seeking`]).
+    seeking: bool,
 }
 
 /// A check done.
@@ -144,7 +147,7 @@ struct Checked {
 fn run_check(checker: Option<&Checker>, due: Due) -> Result<Checked> {
     let checker = checker.ok_or_else(|| Error::Msg("a check is due without a checker".into()))?;
     let t = Instant::now();
-    let result = checker.check(&due.agent, due.may_stop, due.kept.as_ref())?;
+    let result = checker.check_seeking(&due.agent, due.may_stop, due.kept.as_ref(), due.seeking)?;
     Ok(Checked {
         due,
         result,
@@ -421,6 +424,12 @@ impl<L: Learner> Training<L> {
         self.state.check.as_ref()?.first_walk.as_ref()
     }
 
+    /// With `check.max_track_time`, the first check that met the walking bar without that
+    /// margin (its policy in `RUN/first-walk/`), if any.
+    pub fn first_any_walk(&self) -> Option<&CheckRecord> {
+        self.state.check.as_ref()?.first_any_walk.as_ref()
+    }
+
     /// The walking check of the policy `RUN/best/` holds, if the run checks its policies.
     pub fn kept_check(&self) -> Option<&CheckRecord> {
         self.state.check.as_ref()?.kept.as_ref()
@@ -543,6 +552,12 @@ impl<L: Learner> Training<L> {
             trigger,
             may_stop: self.restart_settled(),
             kept: self.kept_check().map(|k| k.result.clone()),
+            seeking: cfg.max_track_time.is_some()
+                && self
+                    .state
+                    .check
+                    .as_ref()
+                    .is_none_or(|c| c.first_any_walk.is_none()),
         }))
     }
 
@@ -596,6 +611,17 @@ impl<L: Learner> Training<L> {
         }
         if record.result.at_bar && state.first_walk.is_none() {
             state.first_walk = Some(record.clone());
+        }
+        let walking = record.result.walking.unwrap_or(false) || record.result.at_bar;
+        if due.seeking && walking && state.first_any_walk.is_none() {
+            let info = BestInfo {
+                generation: record.row,
+                fitness: due.curve,
+                env_steps: due.env_steps,
+                check: Some(record.result.clone()),
+            };
+            checkpoint::save_policy(&self.root, FIRST_WALK, &self.cfg, &due.agent, &info)?;
+            state.first_any_walk = Some(record.clone());
         }
         append_jsonl(&self.root.join(CHECKS_FILE), &record)?;
         state.records += 1;

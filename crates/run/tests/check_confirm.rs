@@ -170,3 +170,66 @@ fn stopping_early_keeps_the_bar_and_does_not_depend_on_the_threads() {
         }
     }
 }
+
+/// Contract: while a run with a margin of speed seeks its first walk, a check also judges
+/// the bar without the margin (`walking`), running the starts it stopped before for that
+/// verdict only: its own counts, rank and bar are those of the same check not seeking. The
+/// flagship (about 46 s over the 50 m) is below a bar that asks 40 s and at the one that does
+/// not; the standing pose is at neither.
+#[test]
+fn a_check_seeking_the_first_walk_judges_the_bar_without_the_margin_too() {
+    let (cfg, walker, stander) = walker_and_stander();
+    let timed = CheckConfig {
+        starts: 2,
+        confirm_starts: 2,
+        finish_share: 1.0,
+        max_track_time: Some(40.0),
+        stop_early: true,
+        ..CheckConfig::default()
+    };
+    let checker = |config: CheckConfig| {
+        Checker::new(
+            config,
+            build::load_model(&cfg.walk).unwrap(),
+            cfg.walk.clone(),
+            cfg.seed,
+        )
+    };
+    // The verdict is what a full check without the margin finds, confirmation included;
+    // kept, it ranks above the 40 s check's first start, so that check stops there.
+    let untimed = CheckConfig {
+        max_track_time: None,
+        stop_early: false,
+        ..timed.clone()
+    };
+    let full = checker(untimed).check(&walker, false, None).unwrap();
+    assert!(full.at_bar && full.starts == 4, "{}", full.describe());
+    let kept = Some(&full);
+    let plain = checker(timed.clone()).check(&walker, true, kept).unwrap();
+    assert!(!plain.at_bar && plain.stopped, "{}", plain.describe());
+    assert_eq!(plain.walking, None);
+    let seeking = checker(timed.clone())
+        .check_seeking(&walker, true, kept, true)
+        .unwrap();
+    assert_eq!(seeking.walking, Some(true), "{}", seeking.describe());
+    assert_eq!(
+        CheckResult {
+            walking: None,
+            ..seeking
+        },
+        plain
+    );
+    let stand = checker(timed.clone())
+        .check_seeking(&stander, true, kept, true)
+        .unwrap();
+    assert_eq!(stand.walking, Some(false), "{}", stand.describe());
+    // Without a margin there is nothing more to judge.
+    let no_margin = CheckConfig {
+        max_track_time: None,
+        ..timed
+    };
+    let walk = checker(no_margin)
+        .check_seeking(&walker, true, None, true)
+        .unwrap();
+    assert!(walk.at_bar && walk.walking.is_none(), "{}", walk.describe());
+}
