@@ -144,8 +144,15 @@ pub fn which_policy(loaded: &LoadedRun) -> String {
             } else {
                 "episode"
             };
+            let what = if loaded.checkpoint.file_name()
+                == Some(std::ffi::OsStr::new(esrl_run::checkpoint::FIRST_WALK))
+            {
+                "the first walk at any speed"
+            } else {
+                "the kept policy"
+            };
             format!(
-                "{dir}: the kept policy of {unit} {} ({} env steps), {how}{other}",
+                "{dir}: {what} of {unit} {} ({} env steps), {how}{other}",
                 b.generation, b.env_steps
             )
         }

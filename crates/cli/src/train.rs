@@ -325,12 +325,11 @@ fn closing(cfg: &TrainConfig, root: &Path, training: &Session) -> String {
                     Some(w) => format!(
                         "  first:  {dir}/first-walk/, the first policy at the walking bar \
                          without the {limit} s margin, came at {} {} ({} env steps, {} of \
-                         training): {}\n",
+                         training); `{esrl} eval {dir}/first-walk --episodes 10` shows it\n",
                         training.unit(),
                         w.row,
                         w.env_steps,
                         human_duration(w.wall_s),
-                        w.result.describe()
                     ),
                     None => format!(
                         "  first:  no policy met the walking bar even without the {limit} s \

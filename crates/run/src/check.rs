@@ -276,20 +276,21 @@ impl CheckResult {
             String::new()
         };
         format!(
-            "{classes}; {}/{} finished, {} falls, {:.2} m/s{}{confirmed}{}",
+            "{classes}; {}/{} finished, {} falls, {:.2} m/s{}{confirmed}{}{}",
             self.finished,
             self.starts,
             self.falls,
             self.mean_forward_velocity,
-            match (self.at_bar, self.walking) {
-                (true, _) => " (at the bar)",
-                (false, Some(true)) => " (at the bar without the margin of speed)",
-                _ => "",
-            },
-            if self.stopped {
-                " (stopped: the bar out of reach)"
+            if self.at_bar { " (at the bar)" } else { "" },
+            if !self.at_bar && self.walking == Some(true) {
+                " (at the bar without the margin of speed, on all its starts)"
             } else {
                 ""
+            },
+            match (self.stopped, self.walking) {
+                (false, _) => "",
+                (true, None) => " (stopped: the bar out of reach)",
+                (true, Some(_)) => " (stopped: the bar with the margin of speed out of reach)",
             }
         )
     }
