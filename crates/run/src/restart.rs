@@ -18,7 +18,8 @@
 //! `esrl train … --seed <seed + 1000 k>` (without `[restart]`) until its own restart point,
 //! so any attempt can be repeated alone. `RUN/config.toml` keeps the seed the run was given;
 //! the summary gives the attempt's seed (`attempt_seed`) and counts the abandoned attempts'
-//! steps and seconds in `steps_to_walk` and `time_to_walk_s` (what the walk cost).
+//! steps and seconds in `steps_to_walk` and `time_to_walk_s` (what the walk cost), and in
+//! `steps_to_any_walk` and `time_to_any_walk_s` when the run has them.
 //!
 //! ```text
 //! RUN/

@@ -680,7 +680,13 @@ impl<L: Learner> Training<L> {
         if self.cfg.restart.is_some() {
             // The walk's cost counts the abandoned attempts ([`restart`] module docs).
             let (steps, wall) = self.attempt.spent();
-            for (name, add) in [("steps_to_walk", steps as f64), ("time_to_walk_s", wall)] {
+            let added = [
+                ("steps_to_walk", steps as f64),
+                ("time_to_walk_s", wall),
+                ("steps_to_any_walk", steps as f64),
+                ("time_to_any_walk_s", wall),
+            ];
+            for (name, add) in added {
                 if let Some(v) = learner.get_mut(name) {
                     *v = Value::from(v.as_f64().unwrap_or(f64::NAN) + add);
                 }
