@@ -659,8 +659,8 @@ pub const TIME_WALKER: &str = "until the first walk: 5-23 min at --threads 2 on 
 /// seventeen seeds that met it within the 5 M (1.92–4.52 M) at the rate measured (2,490–2,590
 /// env steps/s); the whole budget measured on held-out seed 15, which never met it (1,976 s);
 /// the first walk at any speed (`RUN/first-walk/`, `check.max_track_time`'s module docs)
-/// measured on seeds 12, 13 and 14 on the faster Xeon of 2026-12-06 (360, 320 and 462 s).
-pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-30 min at --threads 2 on an idle 2-core machine (13-22 min measured on five seeds, median 19 min; 12 of 17 seeds get there), otherwise the whole 5 M env steps: 33 min (measured on seed 15); the first walk at any speed, kept in RUN/first-walk/, after 5-8 min (measured on seeds 12, 13 and 14)";
+/// measured on seeds 11–15 on the faster Xeon of 2026-12-06 (580, 360, 320, 462 and 513 s).
+pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-30 min at --threads 2 on an idle 2-core machine (13-22 min measured on five seeds, median 19 min; 12 of 17 seeds get there), otherwise the whole 5 M env steps: 33 min (measured on seed 15); the first walk at any speed, kept in RUN/first-walk/, after 5-10 min (measured on seeds 11-15, median 7.7 min)";
 /// `--preset walking-torque`'s time (until the first policy at the walking bar) at
 /// `--threads 2` on an idle 2-core Intel Xeon, measured on
 /// seeds 4, 1 and 5 of `results/torque`'s seed study (`results/speed`, "Time to walk of the
