@@ -599,14 +599,14 @@ impl<L: Learner> Training<L> {
             kept,
             seconds,
         };
+        let info = || BestInfo {
+            generation: record.row,
+            fitness: due.curve,
+            env_steps: due.env_steps,
+            check: Some(record.result.clone()),
+        };
         if kept {
-            let info = BestInfo {
-                generation: record.row,
-                fitness: due.curve,
-                env_steps: due.env_steps,
-                check: Some(record.result.clone()),
-            };
-            checkpoint::save_best(&self.root, &self.cfg, &due.agent, &info)?;
+            checkpoint::save_best(&self.root, &self.cfg, &due.agent, &info())?;
             state.kept = Some(record.clone());
         }
         if record.result.at_bar && state.first_walk.is_none() {
@@ -614,13 +614,7 @@ impl<L: Learner> Training<L> {
         }
         let walking = record.result.walking.unwrap_or(false) || record.result.at_bar;
         if due.seeking && walking && state.first_any_walk.is_none() {
-            let info = BestInfo {
-                generation: record.row,
-                fitness: due.curve,
-                env_steps: due.env_steps,
-                check: Some(record.result.clone()),
-            };
-            checkpoint::save_policy(&self.root, FIRST_WALK, &self.cfg, &due.agent, &info)?;
+            checkpoint::save_policy(&self.root, FIRST_WALK, &self.cfg, &due.agent, &info())?;
             state.first_any_walk = Some(record.clone());
         }
         append_jsonl(&self.root.join(CHECKS_FILE), &record)?;

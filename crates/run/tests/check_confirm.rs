@@ -27,6 +27,16 @@ fn walker_and_stander() -> (TrainConfig, Agent, Agent) {
     (cfg, walker, stander)
 }
 
+/// A checker of `config` on the task of `cfg` (the flagship's).
+fn checker_on(cfg: &TrainConfig, config: CheckConfig) -> Checker {
+    Checker::new(
+        config,
+        build::load_model(&cfg.walk).unwrap(),
+        cfg.walk.clone(),
+        cfg.seed,
+    )
+}
+
 #[test]
 fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
     let (cfg, walker, stander) = walker_and_stander();
@@ -35,12 +45,7 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
         confirm_starts: 2,
         ..CheckConfig::default()
     };
-    let checker = Checker::new(
-        config.clone(),
-        build::load_model(&cfg.walk).unwrap(),
-        cfg.walk.clone(),
-        cfg.seed,
-    );
+    let checker = checker_on(&cfg, config.clone());
 
     let walk = checker.check(&walker, false, None).unwrap();
     assert_eq!(
@@ -51,14 +56,12 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
     );
     assert!(walk.at_bar, "{}", walk.describe());
     // The first two starts alone give the unconfirmed check's figures.
-    let unconfirmed = Checker::new(
+    let unconfirmed = checker_on(
+        &cfg,
         CheckConfig {
             confirm_starts: 0,
             ..config
         },
-        build::load_model(&cfg.walk).unwrap(),
-        cfg.walk.clone(),
-        cfg.seed,
     )
     .check(&walker, false, None)
     .unwrap();
@@ -82,14 +85,7 @@ fn only_a_policy_at_the_bar_is_run_from_the_confirmation_starts() {
 #[test]
 fn stopping_early_keeps_the_bar_and_does_not_depend_on_the_threads() {
     let (cfg, walker, stander) = walker_and_stander();
-    let checker = |config: CheckConfig| {
-        Checker::new(
-            config,
-            build::load_model(&cfg.walk).unwrap(),
-            cfg.walk.clone(),
-            cfg.seed,
-        )
-    };
+    let checker = |config: CheckConfig| checker_on(&cfg, config);
     let stopping = CheckConfig {
         starts: 2,
         confirm_starts: 2,
@@ -187,14 +183,7 @@ fn a_check_seeking_the_first_walk_judges_the_bar_without_the_margin_too() {
         stop_early: true,
         ..CheckConfig::default()
     };
-    let checker = |config: CheckConfig| {
-        Checker::new(
-            config,
-            build::load_model(&cfg.walk).unwrap(),
-            cfg.walk.clone(),
-            cfg.seed,
-        )
-    };
+    let checker = |config: CheckConfig| checker_on(&cfg, config);
     // The verdict is what a full check without the margin finds, confirmation included;
     // kept, it ranks above the 40 s check's first start, so that check stops there.
     let untimed = CheckConfig {
