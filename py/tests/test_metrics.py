@@ -91,6 +91,11 @@ def test_gait_metrics_by_hand() -> None:
     assert g["knee_torque_asymmetry"] == pytest.approx(2.0 / 2.0)  # |1-3| / 2
     assert g["distance"] == 50.0 and g["steps"] == 3 and g["duration"] == 1.5
     assert m.gait_metrics(trace, track_length=100.0)["track_time"] is None
+    assert "torso_pitch" not in g  # not logged
+    p = m.gait_metrics(dict(trace, torso_pitch=[0.3, -0.1, 0.1]))["torso_pitch"]
+    # sorted -0.1, 0.1, 0.3: h = 2 * 0.05 = 0.1 and 2 * 0.95 = 1.9
+    assert p["mean"] == pytest.approx(0.1)
+    assert p["p5"] == pytest.approx(-0.1 + 0.1 * 0.2) and p["p95"] == pytest.approx(0.1 + 0.9 * 0.2)
     with pytest.raises(ValueError, match="actuator `left_hip` not found"):
         m.gait_metrics(trace, left_knee="left_hip")
     bad = dict(trace, torso_y=[0.1, 0.2])

@@ -72,6 +72,9 @@ def test_the_cross_check_runs_a_policy_in_both(capsys) -> None:
         assert r[engine]["episodes"] == 2
         assert sum(r[engine]["classes"].values()) == 2
     assert r["esrl"]["finished"] == 2, "the flagship finishes in esrl"
+    # Both engines log the torso's lean: the flagship walks leaning back a few degrees.
+    for engine in ("esrl", "mujoco"):
+        assert -20.0 < r[engine]["torso_pitch_deg"] < 0.0, r[engine]["torso_pitch_deg"]
     assert main([str(FLAGSHIP), "--episodes", "1"]) == 0
     assert "| MuJoCo |" in capsys.readouterr().out
 

@@ -399,6 +399,14 @@ pub fn render_table(report: &EvalReport) -> String {
             })
             .collect();
         out.push_str(&text_table(&header, &rows));
+        if let Some(p) = &g.torso_pitch {
+            out.push_str(&format!(
+                "torso pitch (forward lean +): mean {:.1}°, p5 {:.1}°, p95 {:.1}°\n",
+                p.mean.to_degrees(),
+                p.p5.to_degrees(),
+                p.p95.to_degrees()
+            ));
+        }
         if report.episodes.len() > 1 {
             out.push_str(&format!(
                 "(means over {} episodes; {} reached the end of the track, {} fell)\n",

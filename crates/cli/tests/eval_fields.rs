@@ -3,7 +3,8 @@
 //! with values that agree with the episode's own trace (recomputed here), deterministic across
 //! invocations and the same whether given the run or its checkpoint folder; the gait cycle's
 //! support phases and each joint's time at a limit agree with the trace's contact flags and
-//! joint angles, and the side view has a frame every 0.1 s; `--json` prints
+//! joint angles, the torso pitch agrees with the side view's torso, and the side view has a
+//! frame every 0.1 s; `--json` prints
 //! the same object; `--record` writes one MCAP per episode; a pendulum run has returns only.
 
 mod common;
@@ -23,7 +24,7 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len() as f64
 }
 
-const GAIT_KEYS: [&str; 21] = [
+const GAIT_KEYS: [&str; 22] = [
     "track_length",
     "track_time",
     "mean_forward_velocity",
@@ -45,6 +46,7 @@ const GAIT_KEYS: [&str; 21] = [
     "track_length",
     "cycle",
     "joints",
+    "torso_pitch",
 ];
 
 #[test]
@@ -184,6 +186,28 @@ fn eval_json_has_every_field_and_agrees_with_its_trace() {
             let got = joint["at_limit"].as_f64().unwrap() * len as f64;
             assert!((got - at).abs() <= near, "{}: {got} vs {at}", joint["name"]);
             assert!(joint["range"].as_f64().unwrap() >= 0.0);
+        }
+
+        // The torso pitch: its summary recomputed from the trace, and each sample against
+        // the side view's drawing of the torso (part 1, the box from the waist up: the
+        // angle of its centre line from the vertical, forward positive) at the same step.
+        let pitch = floats(&tr["torso_pitch"]);
+        assert_eq!(pitch.len(), len);
+        assert!(close(
+            g["torso_pitch"]["mean"].as_f64().unwrap(),
+            mean(&pitch)
+        ));
+        let frames = tr["stick"]["frames"].as_array().unwrap();
+        assert!(!frames.is_empty(), "an episode of {len} steps has frames");
+        for (f, frame) in frames.iter().enumerate() {
+            let b = floats(&frame[1]); // corners x, z: top front, bottom front, bottom back, top back
+            let (dx, dz) = (b[0] + b[6] - b[2] - b[4], b[1] + b[7] - b[3] - b[5]);
+            let drawn = dx.atan2(dz);
+            let at = pitch[4 * f + 3];
+            assert!(
+                (drawn - at).abs() < 0.01,
+                "frame {f}: drawn {drawn}, traced {at}"
+            );
         }
 
         // The side view: one frame every 4 steps (0.1 s), 11 parts for the humanoid.

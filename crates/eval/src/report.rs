@@ -13,12 +13,13 @@
 //!  "track_length": 50.0,
 //!  "episodes": [{"seed": S, "return": .., "length": .., "q0": .., "terminated": ..,
 //!                "truncated": .., "return_terms": {"alive": .., "forward": .., ..},
-//!                "gait": {GaitMetrics with "cycle": {GaitCycle}, "joints": [{JointMotion}]}
-//!                        | null,
+//!                "gait": {GaitMetrics with "cycle": {GaitCycle}, "joints": [{JointMotion}],
+//!                         "torso_pitch": {TorsoPitch}} | null,
 //!                "trace": {"time": [..], "x": [..], "y": [..], "z_error": [..],
 //!                          "forward_velocity": [..], "contact": [[l, r], ..],
 //!                          "joint_names": [..], "joint_limits": [[lo, hi] | null, ..],
-//!                          "joint_angle": [[..], ..], "stick": {StickFigure}}}],
+//!                          "joint_angle": [[..], ..], "torso_pitch": [..],
+//!                          "stick": {StickFigure}}}],
 //!  "mean": {"episodes": K, "return": .., "return_sd": .. | null, "length": .., "q0": ..,
 //!           "falls": n, "finished": n, "return_terms": {..}, "gait": {GaitMetrics} | null}}
 //! ```
@@ -33,7 +34,8 @@
 //! *any* episode fell — a policy that only sometimes finishes is not counted as finishing.
 //! `mean.gait.cycle` averages the episodes' gait-cycle metrics ([`esrl_metrics::mean_cycle`]:
 //! its `gait_classes` counts the episodes per class, its `gait_class` is the most frequent) and
-//! `mean.gait.joints` their ranges of motion and times at a limit.
+//! `mean.gait.joints` their ranges of motion and times at a limit, `mean.gait.torso_pitch`
+//! the torso's mean pitch and its 5th and 95th percentiles (forward lean positive).
 //!
 //! The per-step trace keeps what the figures of `python -m esrl_rs.report` need: the torso path,
 //! each foot's contact flag (1 when its normal force exceeds `gait.cycle.contact_force`, the
@@ -49,7 +51,9 @@ use crate::load::LoadedRun;
 use crate::recording::{metadata, Recorder};
 use crate::stick::StickFigure;
 use esrl_agents::ActMode;
-use esrl_metrics::{mean_cycle, mean_joint_motion, mean_sd, GaitMetrics, GaitOptions, JointMotion};
+use esrl_metrics::{
+    mean_cycle, mean_joint_motion, mean_sd, mean_torso_pitch, GaitMetrics, GaitOptions, JointMotion,
+};
 use esrl_run::checkpoint;
 use esrl_run::run_dir::write_json_atomic;
 use esrl_run::{bail, Context, EnvKind, Result};
@@ -94,6 +98,9 @@ pub struct Trace {
     /// Actuated joint angles per step (rad, rounded to 1e-4).
     #[serde(default)]
     pub joint_angle: Vec<Vec<f32>>,
+    /// Torso pitch per step (rad, forward lean positive; `esrl_metrics::pitch_of`).
+    #[serde(default)]
+    pub torso_pitch: Vec<f64>,
     /// The side view of the robot every 0.1 s.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stick: Option<StickFigure>,
@@ -131,6 +138,7 @@ impl Trace {
                         .collect()
                 })
                 .collect(),
+            torso_pitch: t.torso_pitch.clone(),
             stick: Some(episode.stick.clone()),
         }
     }
@@ -446,6 +454,12 @@ pub fn mean_gait(gaits: &[&GaitMetrics]) -> Option<GaitMetrics> {
                 .filter(|g| !g.joints.is_empty())
                 .map(|g| g.joints.as_slice())
                 .collect::<Vec<&[JointMotion]>>(),
+        ),
+        torso_pitch: mean_torso_pitch(
+            &gaits
+                .iter()
+                .filter_map(|g| g.torso_pitch.as_ref())
+                .collect::<Vec<_>>(),
         ),
     })
 }

@@ -20,13 +20,15 @@
 //!   logged (foot speed = mean over the feet of |p_last − p_first| / duration, horizontal);
 //! - per actuated joint ([`JointMotion`], when `joint_angles` are logged): range of motion
 //!   (5th–95th percentile) and time within [`GaitThresholds::limit_margin`] of a limit from
-//!   `joint_limits`.
+//!   `joint_limits`;
+//! - torso pitch ([`TorsoPitch`], when `torso_pitch` is logged): its mean and 5th and 95th
+//!   percentiles, forward lean positive.
 
 use serde::{Deserialize, Serialize};
 
 use crate::cycle::{gait_phases, step_lengths, GaitCycle, GaitThresholds};
 use crate::error::{check_finite, MetricsError, Result};
-use crate::motion::{joint_motion, JointMotion};
+use crate::motion::{joint_motion, torso_pitch, JointMotion, TorsoPitch};
 
 /// Per-step log of one rollout. Every per-step `Vec` has one entry per logged step; rows of
 /// `torques`, `powers` and `foot_forces` have one entry per actuator / foot, in the order of
@@ -70,6 +72,10 @@ pub struct GaitTrace {
     /// logged (then no step lengths and no foot speed).
     #[serde(default)]
     pub foot_positions: Vec<Vec<[f64; 2]>>,
+    /// Torso pitch (rad, forward lean positive: [`crate::pitch_of`] its orientation) per
+    /// step; empty when not logged (then no [`GaitMetrics::torso_pitch`]).
+    #[serde(default)]
+    pub torso_pitch: Vec<f64>,
 }
 
 /// One step to append to a [`GaitTrace`] with [`GaitTrace::push`].
@@ -95,6 +101,8 @@ pub struct GaitStep<'a> {
     pub joint_angles: &'a [f64],
     /// Horizontal position `[x, y]` of each foot (m); empty when not logged.
     pub foot_positions: &'a [[f64; 2]],
+    /// Torso pitch (rad, forward lean positive); `None` when not logged.
+    pub torso_pitch: Option<f64>,
 }
 
 impl GaitTrace {
@@ -108,8 +116,8 @@ impl GaitTrace {
     }
 
     /// Appends one step (lengths are checked by [`gait_metrics`], not here). Empty
-    /// `joint_angles` / `foot_positions` are not appended, so a trace that never logs them
-    /// keeps them empty.
+    /// `joint_angles` / `foot_positions` and a missing `torso_pitch` are not appended, so a
+    /// trace that never logs them keeps them empty.
     pub fn push(&mut self, step: &GaitStep<'_>) {
         self.time.push(step.time);
         self.torso_x.push(step.torso_x);
@@ -124,6 +132,9 @@ impl GaitTrace {
         }
         if !step.foot_positions.is_empty() {
             self.foot_positions.push(step.foot_positions.to_vec());
+        }
+        if let Some(pitch) = step.torso_pitch {
+            self.torso_pitch.push(pitch);
         }
     }
 
@@ -208,6 +219,9 @@ pub struct GaitMetrics {
     /// Range of motion and time at a limit per actuated joint; empty without joint angles.
     #[serde(default)]
     pub joints: Vec<JointMotion>,
+    /// How far the torso leaned; `None` without a logged torso pitch.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub torso_pitch: Option<TorsoPitch>,
 }
 
 fn check_len(len: usize, expected: usize, what: &str) -> Result<()> {
@@ -311,6 +325,12 @@ pub fn gait_metrics(trace: &GaitTrace, options: &GaitOptions) -> Result<GaitMetr
     let duration = trace.time[n - 1];
     let cycle = gait_cycle(trace, options, duration)?;
     let joints = joint_motions(trace, &options.thresholds)?;
+    let torso_pitch = if trace.torso_pitch.is_empty() {
+        None
+    } else {
+        check_len(trace.torso_pitch.len(), n, "torso_pitch")?;
+        Some(torso_pitch(&trace.torso_pitch)?)
+    };
     let (tl, tr) = (mean_abs_torque[left], mean_abs_torque[right]);
     let knee_torque_asymmetry = if tl + tr == 0.0 {
         0.0
@@ -338,6 +358,7 @@ pub fn gait_metrics(trace: &GaitTrace, options: &GaitOptions) -> Result<GaitMetr
         duration,
         cycle,
         joints,
+        torso_pitch,
     })
 }
 

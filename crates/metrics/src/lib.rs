@@ -66,7 +66,10 @@ pub use interval::{
     bootstrap, iqm, iqm_interval, probability_of_improvement, probability_of_improvement_interval,
     wilson, Interval, BOOTSTRAP_REPS, Z95,
 };
-pub use motion::{joint_motion, mean_joint_motion, percentile, JointMotion};
+pub use motion::{
+    joint_motion, mean_joint_motion, mean_torso_pitch, percentile, pitch_of, torso_pitch,
+    JointMotion, TorsoPitch,
+};
 pub use stats::{mean_sd, MeanSd};
 pub use table::{
     actuator_markdown, format_number, gait_classes_text, joint_markdown, table1, table1_csv,

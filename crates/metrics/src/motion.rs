@@ -1,4 +1,4 @@
-//! Range of motion and time at a limit of each actuated joint.
+//! Range of motion and time at a limit of each actuated joint, and the torso's pitch.
 //!
 //! - **Range of motion** = 95th − 5th percentile of the joint angle over the episode's
 //!   samples: the span the joint actually works in, robust to single-sample spikes (a
@@ -9,6 +9,10 @@
 //! - **Time at a limit** = share of the samples with the angle within `margin` of the lower
 //!   or the upper position limit (`q ≤ lower + margin` or `q ≥ upper − margin`); a joint
 //!   resting on its stop, or pressed beyond it by the solver, counts.
+//! - **Torso pitch** ([`torso_pitch`]): the angle of the torso's up axis from the vertical,
+//!   seen from the side (in the x–z plane of the track: `atan2(u_x, u_z)` for the up axis
+//!   `u`), forward lean positive, as a biomechanist's trunk flexion; its mean and 5th and
+//!   95th percentiles over the episode.
 
 use serde::{Deserialize, Serialize};
 
@@ -156,4 +160,63 @@ pub fn mean_joint_motion(episodes: &[&[JointMotion]]) -> Vec<JointMotion> {
             }
         })
         .collect()
+}
+
+/// How far the torso leaned over a rollout (rad, forward lean positive; module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TorsoPitch {
+    /// Mean pitch.
+    pub mean: f64,
+    /// 5th percentile of the pitch.
+    pub p5: f64,
+    /// 95th percentile of the pitch.
+    pub p95: f64,
+}
+
+/// The pitch (rad, forward lean positive) of a body with orientation `q` (unit quaternion
+/// `[x, y, z, w]`, body to world, z up and x forward along the track): the angle of its up
+/// axis `u` from the vertical in the track's x–z plane, `atan2(u_x, u_z)`. A roll about the
+/// body's forward axis before the pitch leaves it unchanged; a body turned away from the
+/// track by ψ shows about cos ψ of its lean.
+///
+/// ```
+/// let t = 0.2f64; // turned 0.2 rad about +y: the top moves towards +x
+/// let q = [0.0, (t / 2.0).sin(), 0.0, (t / 2.0).cos()];
+/// assert!((esrl_metrics::pitch_of(q) - t).abs() < 1e-12);
+/// ```
+pub fn pitch_of([x, y, z, w]: [f64; 4]) -> f64 {
+    // The body's z axis in the world: the third column of the rotation matrix.
+    let up_x = 2.0 * (x * z + w * y);
+    let up_z = 1.0 - 2.0 * (x * x + y * y);
+    up_x.atan2(up_z)
+}
+
+/// Mean and 5th/95th percentiles of a rollout's torso pitch angles (rad).
+///
+/// Errors: no angles, NaN/inf.
+///
+/// ```
+/// let p = esrl_metrics::torso_pitch(&[0.0, 0.1, 0.2, 0.3, 0.4]).unwrap();
+/// assert!((p.mean - 0.2).abs() < 1e-12 && (p.p5 - 0.02).abs() < 1e-12);
+/// ```
+pub fn torso_pitch(angles: &[f64]) -> Result<TorsoPitch> {
+    check_finite_nonempty(angles, "torso_pitch")?;
+    let mut sorted = angles.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    Ok(TorsoPitch {
+        mean: angles.iter().sum::<f64>() / angles.len() as f64,
+        p5: percentile_sorted(&sorted, 0.05),
+        p95: percentile_sorted(&sorted, 0.95),
+    })
+}
+
+/// The mean of several episodes' torso pitch summaries, figure by figure. `None` for none.
+pub fn mean_torso_pitch(episodes: &[&TorsoPitch]) -> Option<TorsoPitch> {
+    let n = episodes.len() as f64;
+    let m = |f: fn(&TorsoPitch) -> f64| episodes.iter().map(|p| f(p)).sum::<f64>() / n;
+    (!episodes.is_empty()).then(|| TorsoPitch {
+        mean: m(|p| p.mean),
+        p5: m(|p| p.p5),
+        p95: m(|p| p.p95),
+    })
 }

@@ -216,6 +216,7 @@ fn step_lengths_between_footprints() {
             foot_forces: &[f(l[i]), f(r[i])],
             joint_angles: &q,
             foot_positions: &[[foot_x[i][0], 0.1], [foot_x[i][1], -0.1]],
+            torso_pitch: None,
         });
     }
     let g = gait_metrics(&trace, &GaitOptions::default()).unwrap();

@@ -46,6 +46,7 @@ fn trace() -> GaitTrace {
             foot_forces: &feet[i],
             joint_angles: &[],
             foot_positions: &[],
+            torso_pitch: None,
         });
     }
     t
@@ -82,6 +83,51 @@ fn hand_computed_trace() {
     assert_eq!(c.gait_class, esrl_metrics::GaitClass::Stand);
     assert_eq!(c.foot_speed, None, "no foot positions logged");
     assert!(g.joints.is_empty(), "no joint angles logged");
+    assert_eq!(g.torso_pitch, None, "no torso pitch logged");
+}
+
+/// `a ⊗ b` for quaternions `[x, y, z, w]`.
+fn qmul([ax, ay, az, aw]: [f64; 4], [bx, by, bz, bw]: [f64; 4]) -> [f64; 4] {
+    [
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    ]
+}
+
+#[test]
+fn torso_pitch_is_the_lean_seen_from_the_side() {
+    // Each step's torso rolled 0.2 rad about its forward axis, then pitched by θ about +y
+    // (q = q_y(θ) ⊗ q_x(0.2)): its up axis is (cos 0.2 · sin θ, −sin 0.2, cos 0.2 · cos θ),
+    // whose angle from the vertical in the x–z plane is θ.
+    let roll = [0.1f64.sin(), 0.0, 0.0, 0.1f64.cos()];
+    let thetas: [f64; 4] = [0.1, 0.3, -0.1, 0.5];
+    let mut t = trace();
+    for &theta in &thetas {
+        let pitch = [0.0, (theta / 2.0).sin(), 0.0, (theta / 2.0).cos()];
+        t.torso_pitch
+            .push(esrl_metrics::pitch_of(qmul(pitch, roll)));
+    }
+    for (got, want) in t.torso_pitch.iter().zip(thetas) {
+        assert!(close(*got, want), "pitch {got} for θ = {want}");
+    }
+    // A forward lean is positive: the top of a torso turned about +y moves towards +x.
+    assert!(esrl_metrics::pitch_of([0.0, 0.1f64.sin(), 0.0, 0.1f64.cos()]) > 0.0);
+    let p = gait_metrics(&t, &GaitOptions::default())
+        .unwrap()
+        .torso_pitch
+        .expect("a logged torso pitch gives its summary");
+    // Sorted −0.1, 0.1, 0.3, 0.5: h = 3·0.05 = 0.15 and 3·0.95 = 2.85.
+    assert!(close(p.mean, 0.2), "mean {}", p.mean);
+    assert!(close(p.p5, -0.1 + 0.15 * 0.2), "p5 {}", p.p5);
+    assert!(close(p.p95, 0.3 + 0.85 * 0.2), "p95 {}", p.p95);
+
+    t.torso_pitch.pop();
+    assert!(matches!(
+        gait_metrics(&t, &GaitOptions::default()),
+        Err(MetricsError::LengthMismatch { what, .. }) if what == "torso_pitch"
+    ));
 }
 
 #[test]

@@ -54,6 +54,7 @@ fn gait(
         duration: 2.5,
         cycle: None,
         joints: vec![],
+        torso_pitch: None,
     }
 }
 

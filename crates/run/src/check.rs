@@ -84,7 +84,7 @@
 
 use crate::error::{Context, Result};
 use esrl_agents::{ActMode, Agent};
-use esrl_metrics::{gait_metrics, GaitClass, GaitOptions, GaitStep, GaitTrace};
+use esrl_metrics::{gait_metrics, pitch_of, GaitClass, GaitOptions, GaitStep, GaitTrace};
 use esrl_sim::{run_episode, Env, GaitSample, RobotModel, Step, WalkConfig, WalkEnv};
 use esrl_streams::Stream;
 use rand::SeedableRng;
@@ -728,6 +728,7 @@ impl GaitLog {
             foot_forces: &f64s(&g.foot_force),
             joint_angles: &f64s(&g.joint_angle),
             foot_positions: &foot_positions,
+            torso_pitch: Some(pitch_of(g.torso_rotation.map(f64::from))),
         });
         if g.success && self.trace.success_time.is_none() {
             self.trace.success_time = Some(f64::from(g.time));
@@ -755,6 +756,7 @@ fn finite_sample(g: &GaitSample) -> bool {
         .chain(&g.joint_power)
         .chain(&g.foot_force)
         .chain(&g.joint_angle)
+        .chain(&g.torso_rotation)
         .all(|v| v.is_finite())
 }
 

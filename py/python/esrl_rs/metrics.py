@@ -175,11 +175,14 @@ def gait_metrics(
     ``forward_velocity`` (per step), ``torques``, ``powers`` (steps × actuators),
     ``foot_forces`` (steps × feet, N), ``fell`` and ``success_time`` (``None`` if none), and
     optionally ``joint_angles`` (steps × actuators, rad), ``joint_limits`` (``[lower, upper]``
-    or ``None`` per actuator) and ``foot_positions`` (steps × feet × ``[x, y]``, m).
+    or ``None`` per actuator), ``foot_positions`` (steps × feet × ``[x, y]``, m) and
+    ``torso_pitch`` (per step, rad, forward lean positive: ``atan2(u_x, u_z)`` of the torso's
+    up axis ``u`` in the world).
 
     With two feet the result has ``cycle`` (:func:`gait_phases` of the forces above
     ``thresholds["contact_force"]``, step lengths, foot speed, ``gait_class``); with joint
-    angles, ``joints`` (:func:`joint_motion` of each actuator)."""
+    angles, ``joints`` (:func:`joint_motion` of each actuator); with the torso pitch,
+    ``torso_pitch`` (its ``mean``, ``p5`` and ``p95``)."""
     return _m.gait_metrics(trace, track_length, left_knee, right_knee, _thresholds(thresholds))
 
 

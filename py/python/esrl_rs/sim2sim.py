@@ -338,6 +338,7 @@ class MujocoWalk:
             "torques": torque, "powers": power, "foot_forces": self.foot_forces(),
             "joint_angles": np.array([d.qpos[i] for i in self.act_q]),
             "foot_positions": [list(d.xpos[f][:2]) for f in self.feet],
+            "torso_pitch": math.atan2(rot[0, 2], rot[2, 2]),
             "fell": fell, "success": success,
         }
         return obs, terminated, truncated, sample
@@ -350,7 +351,8 @@ class MujocoWalk:
         names = list(self.rust.action_names)
         tr: Dict[str, Any] = {k: [] for k in ("time", "torso_x", "torso_y", "torso_z_error",
                                              "forward_velocity", "torques", "powers",
-                                             "foot_forces", "joint_angles", "foot_positions")}
+                                             "foot_forces", "joint_angles", "foot_positions",
+                                             "torso_pitch")}
         fell, success_time = False, None
         while True:
             obs, terminated, truncated, s = self.step(policy.act(obs))
@@ -386,6 +388,7 @@ def _summary(gaits: List[Dict[str, Any]], past_limit: Sequence[float]) -> Dict[s
         c = (g.get("cycle") or {}).get("gait_class", "fall")
         classes[c] = classes.get(c, 0) + 1
     times = [g["track_time"] for g in gaits if g.get("track_time") is not None]
+    pitches = [g["torso_pitch"]["mean"] for g in gaits if g.get("torso_pitch")]
     return {
         "episodes": len(gaits),
         "finished": len(times),
@@ -395,6 +398,8 @@ def _summary(gaits: List[Dict[str, Any]], past_limit: Sequence[float]) -> Dict[s
         "speed": float(np.mean([g["mean_forward_velocity"] for g in gaits])),
         "sway": float(np.mean([g["mean_abs_lateral"] for g in gaits])),
         "knee_asymmetry": float(np.mean([g["knee_torque_asymmetry"] for g in gaits])),
+        # The torso's mean lean from the vertical, forward positive (degrees).
+        "torso_pitch_deg": (math.degrees(float(np.mean(pitches))) if pitches else None),
         # How far the joints went past the URDF's limits (module docs: ``limits``).
         "past_limit_deg": max(past_limit, default=0.0),
     }
@@ -465,14 +470,15 @@ def cross_checks(path: str, episodes: int, seed: int,
 def _row(name: str, s: Dict[str, Any]) -> str:
     classes = ", ".join(f"{c} {n}" for c, n in s["classes"].items())
     tt = f"{s['track_time']:.1f}" if s["track_time"] is not None else "–"
+    pitch = f"{s['torso_pitch_deg']:.1f}" if s.get("torso_pitch_deg") is not None else "–"
     return (f"| {name} | {classes} | {s['finished']}/{s['episodes']} | {s['falls']} | "
             f"{tt} | {s['speed']:.2f} | {s['sway']:.3f} | {100 * s['knee_asymmetry']:.1f} % | "
-            f"{s['past_limit_deg']:.1f} |")
+            f"{pitch} | {s['past_limit_deg']:.1f} |")
 
 
 _HEADER = ("| engine | gait classes | finished 50 m | falls | track time (s) | speed (m/s) | "
-           "sway (m) | knee asym. | past a limit (°) |\n"
-           "|---|---|---:|---:|---:|---:|---:|---:|---:|")
+           "sway (m) | knee asym. | torso pitch (°) | past a limit (°) |\n"
+           "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
 
 
 def _table(r: Dict[str, Any]) -> str:
