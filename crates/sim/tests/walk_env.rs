@@ -467,6 +467,14 @@ fn bad_configs_name_the_field() {
         (
             {
                 let mut c = WalkConfig::default();
+                c.reward.tilt_sq = -1.0;
+                c
+            },
+            "reward.tilt_sq",
+        ),
+        (
+            {
+                let mut c = WalkConfig::default();
                 c.reward.forward_gate = Some(esrl_sim::UprightGate {
                     max_tilt: 0.0,
                     max_height_drop: 0.1,

@@ -1,7 +1,8 @@
 //! Contract: the reward, termination and reset options of `WalkConfig` do what the module
 //! docs of `walk` say, each checked against a hand-computed expectation, and their defaults
 //! are the paper's behaviour: the alive bonus is not paid on the step that falls; the
-//! squared-action and squared-torque penalties are `w·Σ a²` and `w·Σ (τ/τmax)²`; the gated
+//! squared-action and squared-torque penalties are `w·Σ a²` and `w·Σ (τ/τmax)²`, the tilt
+//! penalty `w·tilt²`; the gated
 //! forward term is paid only while the torso is upright and tall; the episode ends off course
 //! past the lateral and yaw limits; resets start crouched, split or mixed with the documented
 //! joint offsets, and the reset noise is the documented uniform draw.
@@ -84,6 +85,41 @@ fn squared_action_and_torque_penalties() {
         let total: f32 = s.info.reward_terms.iter().map(|t| t.1).sum();
         assert!((total - s.reward).abs() < 1e-6);
     }
+}
+
+#[test]
+fn the_tilt_penalty_is_w_times_the_squared_tilt() {
+    // A pose that leans and falls: the tilt grows from about 0 to past the fall's 45°.
+    let action = [0.3, 0.2, -0.6, 0.3, 0.2, -0.6];
+    let mut config = WalkConfig::default();
+    let mut env = WalkEnv::new(config.clone()).unwrap();
+    env.reset(2);
+    assert_eq!(
+        term(&env.step(&action), "tilt_sq"),
+        None,
+        "no term at weight 0"
+    );
+
+    config.reward.tilt_sq = 2.0;
+    let mut env = WalkEnv::new(config).unwrap();
+    env.reset(2);
+    let mut largest = 0.0f32;
+    for _ in 0..80 {
+        let s = env.step(&action);
+        let t = tilt(gait(&s).torso_rotation);
+        let got = term(&s, "tilt_sq").unwrap();
+        assert!(
+            (got + 2.0 * t * t).abs() < 1e-5,
+            "tilt_sq {got} at tilt {t}"
+        );
+        let total: f32 = s.info.reward_terms.iter().map(|t| t.1).sum();
+        assert!((total - s.reward).abs() < 1e-5);
+        largest = largest.max(t);
+        if s.terminated {
+            break;
+        }
+    }
+    assert!(largest > 0.3, "the pose never leaned: {largest} rad");
 }
 
 #[test]

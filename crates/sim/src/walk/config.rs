@@ -35,6 +35,11 @@ pub struct RewardConfig {
     /// τmaxᵢ its effort limit. Unlike the power term it prices holding a load still. Default
     /// 0 (the paper has none).
     pub torque_sq: f32,
+    /// Weight of the squared-tilt penalty `tilt²`, the angle (rad) between the torso's z axis
+    /// and the vertical: prices a leaning trunk (every walk of `walker` leans back 5–24°,
+    /// `results/gait`). Default 0 (the paper has none).
+    #[serde(skip_serializing_if = "crate::sim::is_zero")]
+    pub tilt_sq: f32,
     /// Pay the forward term only while the torso is upright and tall (DeepMind Control's
     /// walker multiplies its move reward by its stand reward): when set, `w_v·vx` is replaced
     /// by 0 on steps where the torso tilts more than `max_tilt` or is lower than
@@ -66,6 +71,7 @@ impl Default for RewardConfig {
             alive: 0.025,
             action_sq: 0.0,
             torque_sq: 0.0,
+            tilt_sq: 0.0,
             forward_gate: None,
             forward_cap: None,
             forward_over_cap: 0.0,
@@ -684,6 +690,7 @@ impl WalkConfig {
         fin("reward.alive", self.reward.alive)?;
         nonneg("reward.action_sq", self.reward.action_sq)?;
         nonneg("reward.torque_sq", self.reward.torque_sq)?;
+        nonneg("reward.tilt_sq", self.reward.tilt_sq)?;
         if let Some(c) = self.reward.forward_cap {
             pos("reward.forward_cap", c)?;
         }

@@ -101,6 +101,8 @@
 //! - `reward.torque_sq = w`: adds `torque_sq = −w·Σ (τᵢ/τmaxᵢ)²`, `τᵢ` the mean delivered
 //!   torque of the period: prices holding a load (against a limit, gravity or a servo's
 //!   target) that the power term does not see;
+//! - `reward.tilt_sq = w`: adds `tilt_sq = −w·tilt²`, `tilt` the angle (rad) between the
+//!   torso's z axis and the vertical (the fall rule's tilt): prices a leaning trunk;
 //! - `reward.forward_gate = { max_tilt, max_height_drop }`: `forward` is 0 on steps where the
 //!   torso tilts more than `max_tilt` from vertical or is more than `max_height_drop` below its
 //!   standing height (DeepMind Control's walker pays its move reward only in proportion to

@@ -167,6 +167,9 @@ pub(super) fn step_outcome(
             .sum();
         terms.push(("torque_sq", -w.torque_sq * t2));
     }
+    if w.tilt_sq != 0.0 {
+        terms.push(("tilt_sq", -w.tilt_sq * tilt * tilt));
+    }
     let mut reward: f32 = terms.iter().map(|t| t.1).sum();
     let fell = fell || !reward.is_finite();
     if !finite || !reward.is_finite() {
