@@ -4,7 +4,7 @@
 //! invocations and the same whether given the run or its checkpoint folder; the gait cycle's
 //! support phases and each joint's time at a limit agree with the trace's contact flags and
 //! joint angles, the torso pitch agrees with the side view's torso, and the side view has a
-//! frame every 0.1 s; `--json` prints
+//! frame every 0.1 s; with a gait clock each episode keeps the phase its reset drew; `--json` prints
 //! the same object; `--record` writes one MCAP per episode; a pendulum run has returns only.
 
 mod common;
@@ -297,4 +297,48 @@ fn pendulum_eval_has_returns_only() {
     ]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("pendulum"));
+}
+
+#[test]
+fn eval_json_keeps_the_start_phase_of_a_gait_clock() {
+    let tmp = tempfile::tempdir().unwrap();
+    let plain = tmp.path().join("plain");
+    smoke("es-sac", &plain, &[]);
+    ok(&["eval", plain.to_str().unwrap(), "--last", "--episodes", "1"]);
+    let eval = read_json(&plain.join("eval.json"));
+    assert!(
+        eval["episodes"][0].get("start_phase").is_none(),
+        "no clock, no start phase"
+    );
+
+    let overlay = tmp.path().join("clock.toml");
+    std::fs::write(&overlay, "walk = { gait_clock = { period = 0.8 } }\n").unwrap();
+    let run = tmp.path().join("clock");
+    smoke("es-sac", &run, &["--config", overlay.to_str().unwrap()]);
+    let r = run.to_str().unwrap();
+    ok(&[
+        "eval",
+        r,
+        "--last",
+        "--episodes",
+        "3",
+        "--seed",
+        "11",
+        "--traces",
+        "0",
+    ]);
+    let eval = read_json(&run.join("eval.json"));
+    // The phase each seed's reset draws, from an environment built from the run's own
+    // configuration, and the clock entries (sin 2πφ, cos 2πφ) of its first observation.
+    let config = esrl_run::TrainConfig::load(&run.join("config.toml")).unwrap();
+    let mut env = esrl_sim::WalkEnv::new(config.walk).unwrap();
+    for (k, e) in eval["episodes"].as_array().unwrap().iter().enumerate() {
+        let phase = e["start_phase"].as_f64().unwrap();
+        let obs = esrl_sim::Env::reset(&mut env, 11 + k as u64);
+        assert_eq!(phase, f64::from(env.reset_phase()), "episode {k}");
+        let angle = std::f32::consts::TAU * phase as f32;
+        let n = obs.len();
+        assert!((obs[n - 2] - angle.sin()).abs() < 1e-6, "episode {k}");
+        assert!((obs[n - 1] - angle.cos()).abs() < 1e-6, "episode {k}");
+    }
 }

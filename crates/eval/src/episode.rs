@@ -107,6 +107,8 @@ pub struct WalkEpisode {
     pub trace: GaitTrace,
     /// The side view of the robot every [`DEFAULT_INTERVAL`] seconds.
     pub stick: StickFigure,
+    /// The gait-clock phase φ ∈ [0, 1) the episode started from (0 without a clock).
+    pub start_phase: f32,
 }
 
 impl WalkEpisode {
@@ -151,5 +153,6 @@ pub fn walk_episode(
         rollout,
         trace: log.finish(),
         stick: stick.finish(),
+        start_phase: env.reset_phase(),
     })
 }

@@ -12,7 +12,8 @@
 //! {"run": "...", "agent": "es-sac", "env": "walk", "checkpoint": "...", "seed": S,
 //!  "track_length": 50.0,
 //!  "episodes": [{"seed": S, "return": .., "length": .., "q0": .., "terminated": ..,
-//!                "truncated": .., "return_terms": {"alive": .., "forward": .., ..},
+//!                "truncated": .., "start_phase": φ (with a gait clock),
+//!                "return_terms": {"alive": .., "forward": .., ..},
 //!                "gait": {GaitMetrics with "cycle": {GaitCycle}, "joints": [{JointMotion}],
 //!                         "torso_pitch": {TorsoPitch}} | null,
 //!                "trace": {"time": [..], "x": [..], "y": [..], "z_error": [..],
@@ -23,6 +24,9 @@
 //!  "mean": {"episodes": K, "return": .., "return_sd": .. | null, "length": .., "q0": ..,
 //!           "falls": n, "finished": n, "return_terms": {..}, "gait": {GaitMetrics} | null}}
 //! ```
+//!
+//! `start_phase` is the gait-clock phase φ ∈ [0, 1) the episode started from (drawn from its
+//! seed): which starts a policy falls from, by phase.
 //!
 //! `return_terms` splits the return by the environment's reward terms (`StepInfo::reward_terms`
 //! summed over the episode): what pays a policy, e.g. how much of a shuffle's return is
@@ -161,6 +165,10 @@ pub struct EpisodeEval {
     pub terminated: bool,
     /// Ended by the time limit.
     pub truncated: bool,
+    /// The gait-clock phase φ ∈ [0, 1) the episode started from (walking runs with a gait
+    /// clock; drawn from the episode's seed), else absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start_phase: Option<f64>,
     /// The return split by reward term (name → the term summed over the episode; they sum
     /// to `return` up to single-precision rounding): what pays the policy.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
@@ -344,7 +352,7 @@ fn evaluate_episode(loaded: &LoadedRun, seed: u64, record: Option<&Path>) -> Res
     let act = |obs: &[f32], action: &mut [f32]| {
         policy.act(obs, ActMode::Deterministic, &mut rng, action);
     };
-    let (rollout, gait, trace) = match loaded.walk_env()? {
+    let (rollout, gait, trace, start_phase) = match loaded.walk_env()? {
         Some(mut env) => {
             let mut recorder = match record {
                 Some(path) => Some(Recorder::create(path, &env, metadata(loaded, seed))?),
@@ -371,12 +379,17 @@ fn evaluate_episode(loaded: &LoadedRun, seed: u64, record: Option<&Path>) -> Res
                     c.contact_force
                 });
             let trace = Trace::new(&ep, contact_force);
-            (ep.rollout, gait, Some(trace))
+            let start_phase = env
+                .config()
+                .gait_clock
+                .is_some()
+                .then_some(f64::from(ep.start_phase));
+            (ep.rollout, gait, Some(trace), start_phase)
         }
         None => {
             let mut env = Pendulum::new();
             let r = rollout(&mut env, seed, act, |_, _, _| Ok(()))?;
-            (r, None, None)
+            (r, None, None, None)
         }
     };
     Ok(EpisodeEval {
@@ -387,6 +400,7 @@ fn evaluate_episode(loaded: &LoadedRun, seed: u64, record: Option<&Path>) -> Res
             .then(|| loaded.agent.q0(&rollout.first_obs)),
         terminated: rollout.terminated,
         truncated: rollout.truncated,
+        start_phase,
         return_terms: rollout
             .return_terms
             .iter()

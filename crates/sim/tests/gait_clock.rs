@@ -79,6 +79,11 @@ fn the_clock_is_observed_and_rewarded_step_by_step() {
             let angle = std::f32::consts::TAU * phi;
             assert!((step.obs[43] - angle.sin()).abs() < 1e-5);
             assert!((step.obs[44] - angle.cos()).abs() < 1e-5);
+            assert_eq!(
+                env.reset_phase(),
+                phi0,
+                "the start phase stays the episode's"
+            );
             let g = step.info.gait.as_ref().unwrap();
             let term = step
                 .info

@@ -122,6 +122,11 @@ fn mirrored_actions_give_mirrored_observations() {
     b.set_start_phase(Some(0.7));
     a.reset(3);
     b.reset(3);
+    assert_eq!(
+        (a.reset_phase(), b.reset_phase()),
+        (0.2, 0.7),
+        "the set phases"
+    );
     let changed: Vec<usize> = (0..a.obs_dim())
         .filter(|&i| m.obs_map()[i] != (i, 1.0))
         .collect();

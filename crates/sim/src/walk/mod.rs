@@ -438,6 +438,12 @@ impl WalkEnv {
         }
     }
 
+    /// The gait-clock phase φ ∈ [0, 1) the current episode started from: the reset seed's
+    /// draw, or the phase set by [`WalkEnv::set_start_phase`] (0 without a clock).
+    pub fn reset_phase(&self) -> f32 {
+        self.phase0
+    }
+
     /// Sets the gait-clock phase φ ∈ [0, 1) that every following [`Env::reset`] starts from
     /// instead of the one drawn from its seed (the rest of the reset is the seed's, and the
     /// seed's stream is drawn as before), or, with `None`, goes back to the seed's draw. A
