@@ -181,6 +181,11 @@ pub struct EvalArgs {
     /// disturbs the plain task, as the robustness card does).
     #[arg(long)]
     pub undisturbed: bool,
+    /// Evaluate from the task's default starts (the standing pose with its default joint
+    /// noise: `walk.init_noise` and `walk.reset` at their defaults) instead of the run's own:
+    /// how a policy trained from wider or other starts walks from the standard ones.
+    #[arg(long)]
+    pub default_starts: bool,
     /// What the observed torso orientation is measured against on a slope (`--perturb
     /// slope=…`, the card's slopes): `ground` (the frame of the flat ground under tilted
     /// gravity: the slope's tilt does not show) or `gravity` (as an IMU on a real slope

@@ -36,6 +36,12 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         }
         loaded = loaded.undisturbed()?;
     }
+    if args.default_starts {
+        eprintln!(
+            "from the task's default starts (walk.init_noise and walk.reset at their defaults)"
+        );
+        loaded = loaded.default_starts()?;
+    }
     if let Some(frame) = &args.orientation_frame {
         let mut walk = loaded.config.walk.clone();
         walk.orientation_frame = match frame.as_str() {
@@ -77,6 +83,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     )?;
     report.perturb = perturb;
     report.undisturbed = args.undisturbed;
+    report.default_starts = args.default_starts;
     if args.robustness {
         eprintln!(
             "robustness card: {} disturbances × {} episodes",

@@ -342,3 +342,62 @@ fn eval_json_keeps_the_start_phase_of_a_gait_clock() {
         assert!((obs[n - 1] - angle.cos()).abs() < 1e-6, "episode {k}");
     }
 }
+
+#[test]
+fn default_starts_evaluates_from_the_tasks_standard_resets() {
+    let tmp = tempfile::tempdir().unwrap();
+    // A run that trained from wide, mixed starts (crouched, split, standing).
+    let overlay = tmp.path().join("wide.toml");
+    std::fs::write(
+        &overlay,
+        "walk = { gait_clock = { period = 0.8 }, reset = { pose = \"mixed\" }, \
+         init_noise = { joint_angle = 0.1, joint_velocity = 0.5 } }\n",
+    )
+    .unwrap();
+    let run = tmp.path().join("wide");
+    smoke("es-sac", &run, &["--config", overlay.to_str().unwrap()]);
+    let r = run.to_str().unwrap();
+    let own = tmp.path().join("own.json");
+    let standard = tmp.path().join("standard.json");
+    let args = ["--last", "--episodes", "4", "--seed", "20", "--traces", "0"];
+    ok(&[&["eval", r, "--out", own.to_str().unwrap()], &args[..]].concat());
+    ok(&[
+        &[
+            "eval",
+            r,
+            "--default-starts",
+            "--out",
+            standard.to_str().unwrap(),
+        ],
+        &args[..],
+    ]
+    .concat());
+    let (own, standard) = (read_json(&own), read_json(&standard));
+    assert!(own.get("default_starts").is_none());
+    assert_eq!(standard["default_starts"], true);
+    // Each episode's start, from environments built by hand: the run's own task, and the
+    // same task with the default reset pose and joint noise.
+    let config = esrl_run::TrainConfig::load(&run.join("config.toml")).unwrap();
+    let mut wide = esrl_sim::WalkEnv::new(config.walk.clone()).unwrap();
+    let plain_walk = esrl_sim::WalkConfig {
+        init_noise: esrl_sim::InitNoise::default(),
+        reset: esrl_sim::ResetConfig::default(),
+        ..config.walk
+    };
+    let mut plain = esrl_sim::WalkEnv::new(plain_walk).unwrap();
+    let mut differ = 0;
+    for k in 0..4 {
+        let seed = 20 + k as u64;
+        let wide_obs = esrl_sim::Env::reset(&mut wide, seed);
+        let plain_obs = esrl_sim::Env::reset(&mut plain, seed);
+        let phase = |report: &Value| report["episodes"][k]["start_phase"].as_f64().unwrap();
+        assert_eq!(phase(&own), f64::from(wide.reset_phase()), "episode {k}");
+        assert_eq!(
+            phase(&standard),
+            f64::from(plain.reset_phase()),
+            "episode {k}"
+        );
+        differ += usize::from(wide_obs != plain_obs);
+    }
+    assert_eq!(differ, 4, "the two tasks start from different states");
+}

@@ -47,6 +47,17 @@ impl LoadedRun {
         self.with_walk(walk)
     }
 
+    /// The same policy from the task's default starts: `walk.init_noise` and `walk.reset` at
+    /// their defaults (the standing pose, ±0.01 rad and ±0.01 rad/s of joint noise), the rest
+    /// of the run's task unchanged: how a policy trained from other starts walks from the
+    /// standard ones (`esrl eval --default-starts`).
+    pub fn default_starts(&self) -> Result<LoadedRun> {
+        let mut walk = self.config.walk.clone();
+        walk.init_noise = esrl_sim::InitNoise::default();
+        walk.reset = esrl_sim::ResetConfig::default();
+        self.with_walk(walk)
+    }
+
     /// A fresh walking environment of this run (`None` for a pendulum run).
     pub fn walk_env(&self) -> Result<Option<WalkEnv>> {
         match &self.model {

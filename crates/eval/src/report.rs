@@ -236,6 +236,10 @@ pub struct EvalReport {
     /// (`[walk.perturb]`; `esrl eval --undisturbed`), `perturb` then added to the plain task.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub undisturbed: bool,
+    /// Whether the episodes started from the task's default starts instead of the run's own
+    /// (`walk.init_noise` and `walk.reset` at their defaults; `esrl eval --default-starts`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub default_starts: bool,
     /// What the observed torso orientation was measured against on slopes
     /// (`walk.orientation_frame`, or `esrl eval --orientation-frame`); absent: `ground`.
     #[serde(default, skip_serializing_if = "esrl_sim::OrientationFrame::is_ground")]
@@ -339,6 +343,7 @@ pub fn evaluate_with(
         mean,
         perturb: Vec::new(),
         undisturbed: false,
+        default_starts: false,
         orientation_frame: loaded.config.walk.orientation_frame,
         robustness: None,
     })
