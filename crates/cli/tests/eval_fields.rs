@@ -4,8 +4,10 @@
 //! invocations and the same whether given the run or its checkpoint folder; the gait cycle's
 //! support phases and each joint's time at a limit agree with the trace's contact flags and
 //! joint angles, the torso pitch agrees with the side view's torso, and the side view has a
-//! frame every 0.1 s; with a gait clock each episode keeps the phase its reset drew; `--json` prints
-//! the same object; `--record` writes one MCAP per episode; a pendulum run has returns only.
+//! frame every 0.1 s; with a gait clock each episode keeps the phase its reset drew;
+//! `--default-starts` (and a study's `[eval] default_starts = true`) evaluates from the task's
+//! standard starts; `--json` prints the same object; `--record` writes one MCAP per episode; a
+//! pendulum run has returns only.
 
 mod common;
 
@@ -400,4 +402,83 @@ fn default_starts_evaluates_from_the_tasks_standard_resets() {
         differ += usize::from(wide_obs != plain_obs);
     }
     assert_eq!(differ, 4, "the two tasks start from different states");
+}
+
+#[test]
+fn a_study_evaluates_from_the_standard_starts_when_asked() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = tmp.path().join("wide.toml");
+    std::fs::write(
+        &study,
+        r#"
+seeds = [0]
+[eval]
+episodes = 3
+traces = 0
+default_starts = true
+[[arm]]
+name = "wide"
+agent = "es-sac"
+preset = "smoke"
+generations = 1
+set = { walk = { gait_clock = { period = 0.8 }, init_noise = { joint_angle = 0.1, joint_velocity = 0.5 } } }
+"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    ok(&[
+        "study",
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--no-progress",
+    ]);
+    let record = out.join("records/wide-s0");
+    let recorded = read_json(&record.join("eval.json"));
+    assert_eq!(recorded["default_starts"], true);
+    // The record's policy folder evaluated again, from the standard starts and from its own.
+    let policy = record.join("policy");
+    let eval = |extra: &[&str], name: &str| {
+        let file = tmp.path().join(name);
+        let mut args = vec![
+            "eval",
+            policy.to_str().unwrap(),
+            "--episodes",
+            "3",
+            "--seed",
+            "1000",
+            "--traces",
+            "0",
+            "--out",
+            file.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        ok(&args);
+        // The episodes without q0 (the record's policy folder holds the actor alone).
+        let mut episodes = read_json(&file)["episodes"].clone();
+        for e in episodes.as_array_mut().unwrap() {
+            e.as_object_mut().unwrap().remove("q0");
+        }
+        episodes
+    };
+    let mut kept = recorded["episodes"].clone();
+    for e in kept.as_array_mut().unwrap() {
+        e.as_object_mut().unwrap().remove("q0");
+    }
+    let standard = eval(&["--default-starts"], "standard.json");
+    assert!(
+        kept == standard,
+        "the record differs from `esrl eval --default-starts`"
+    );
+    assert!(
+        eval(&[], "own.json") != standard,
+        "the run's own starts are the standard ones"
+    );
+    ok(&["study", "report", out.to_str().unwrap()]);
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains("from the task's standard starts"),
+        "{report}"
+    );
 }

@@ -11,6 +11,8 @@
 //! seed = 1000
 //! policy = "kept"                 # RUN/best/ (the walking check's choice); "last": the checkpoint
 //! undisturbed = false             # true: on the plain task, without [walk.perturb]
+//! default_starts = false          # true: from the task's standard starts (walk.init_noise,
+//!                                 # walk.reset at their defaults), for runs trained from others
 //!
 //! [[arm]]
 //! name = "default"
@@ -150,6 +152,11 @@ pub struct StudyEval {
     /// (`[walk.perturb]`; as `esrl eval --undisturbed`). Default false: each run's own task.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub undisturbed: bool,
+    /// Evaluate from the task's standard starts (`walk.init_noise` and `walk.reset` at their
+    /// defaults; as `esrl eval --default-starts`), for runs trained from other starts.
+    /// Default false: each run's own starts.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub default_starts: bool,
 }
 
 impl Default for StudyEval {
@@ -160,6 +167,7 @@ impl Default for StudyEval {
             policy: Handover::Kept,
             traces: 1,
             undisturbed: false,
+            default_starts: false,
         }
     }
 }

@@ -1,13 +1,13 @@
 //! `esrl study report`: the records of a study folder tabulated, per arm with interval
 //! estimates, arm against arm, run by run, and as the paper's Table 1.
 
-use super::{held_study, read_eval, Handover, Study};
+use super::{held_study, read_eval, Handover, Study, StudyEval};
 use anyhow::{bail, Context, Result};
 use esrl_eval::EvalReport;
 use esrl_metrics::{
-    actuator_markdown, gait_classes_text, iqm_interval, joint_markdown,
+    actuator_markdown, bootstrap, gait_classes_text, iqm_interval, joint_markdown, mean_sd,
     probability_of_improvement_interval, summarize_method, table1, table1_markdown, wilson,
-    AgentRuns, GaitClass, Interval, SeedResult, Z95,
+    AgentRuns, GaitClass, Interval, SeedResult, BOOTSTRAP_REPS, Z95,
 };
 use esrl_run::run_dir::{write_atomic, write_json_atomic};
 use esrl_run::{RunDir, Summary};
@@ -131,6 +131,16 @@ fn fmt(v: Option<f64>, digits: usize) -> String {
         .map_or("–".into(), |x| format!("{x:.digits$}"))
 }
 
+/// A share as per cent with its interval: "40 % [12–77 %]".
+fn percent_interval(i: &Interval, digits: usize) -> String {
+    format!(
+        "{:.digits$} % [{:.digits$}–{:.digits$} %]",
+        100.0 * i.estimate,
+        100.0 * i.lo,
+        100.0 * i.hi
+    )
+}
+
 fn interval_text(i: &Interval, digits: usize, scale: f64) -> String {
     format!(
         "{:.digits$} [{:.digits$}, {:.digits$}]",
@@ -246,12 +256,23 @@ fn heading(dir: &Path, study: &Study, recorded: usize) -> String {
         },
         study.file.eval.episodes,
         study.file.eval.seed,
-        if study.file.eval.undisturbed {
-            " on the plain task, without the runs' training-time disturbances"
-        } else {
-            ""
-        },
+        eval_conditions(&study.file.eval),
     )
+}
+
+/// How the study's evaluation differs from each run's own task, as a clause of the heading.
+fn eval_conditions(eval: &StudyEval) -> String {
+    let mut clauses = Vec::new();
+    if eval.undisturbed {
+        clauses.push(" on the plain task, without the runs' training-time disturbances");
+    }
+    if eval.default_starts {
+        clauses.push(
+            " from the task's standard starts (`walk.init_noise` and `walk.reset` at their \
+             defaults), not the runs' own",
+        );
+    }
+    clauses.join(",")
 }
 
 /// "Per arm": runs at the bar with the Wilson interval, the IQM Best-Win-50 and the steps to
@@ -259,8 +280,9 @@ fn heading(dir: &Path, study: &Study, recorded: usize) -> String {
 fn per_arm(study: &Study, rows: &[RunRow]) -> Result<(String, Vec<Value>)> {
     let mut md = String::new();
     md.push_str(
-        "## Per arm\n\n| arm | runs | at the bar | rate [95 %] | IQM Best-Win-50 [95 %] | walked \
-         in training | IQM steps to walk [95 %] |\n|---|---:|---:|---|---|---:|---|\n",
+        "## Per arm\n\n| arm | runs | at the bar | rate [95 %] | finished every episode [95 %] \
+         | falls per episode [95 %] | IQM Best-Win-50 [95 %] | walked in training | IQM steps to \
+         walk [95 %] |\n|---|---:|---:|---|---|---|---|---:|---|\n",
     );
     let mut arms_json = Vec::new();
     for (a, arm) in study.file.arms.iter().enumerate() {
@@ -273,18 +295,32 @@ fn per_arm(study: &Study, rows: &[RunRow]) -> Result<(String, Vec<Value>)> {
         let rate = wilson(k, n, Z95)?;
         let bw: Vec<f64> = mine.iter().map(|r| r.best_win_50).collect();
         let bw_iqm = iqm_interval(&bw, 1 + a as u64)?;
+        // A policy that finishes every start of the evaluation (issue 34's reliability), and
+        // the share of starts that end in a fall: the mean of the runs' shares, its interval
+        // from resampling runs (policies differ in how often they fall, so the episodes of
+        // one run are not independent draws of the arm's).
+        let clean = mine
+            .iter()
+            .filter(|r| r.episodes > 0 && r.finished == r.episodes)
+            .count();
+        let clean_rate = wilson(clean, n, Z95)?;
+        let fall_shares: Vec<f64> = mine
+            .iter()
+            .map(|r| r.falls as f64 / r.episodes.max(1) as f64)
+            .collect();
+        let falls = bootstrap(
+            &fall_shares,
+            |v| Ok(mean_sd(v)?.mean),
+            BOOTSTRAP_REPS,
+            200 + a as u64,
+        )?;
         let walked: Vec<f64> = mine.iter().filter_map(|r| r.steps_to_walk).collect();
         let steps_iqm = if walked.is_empty() {
             None
         } else {
             Some(iqm_interval(&walked, 100 + a as u64)?)
         };
-        let rate_text = format!(
-            "{:.0} % [{:.0}–{:.0} %]",
-            100.0 * rate.estimate,
-            100.0 * rate.lo,
-            100.0 * rate.hi
-        );
+        let rate_text = percent_interval(&rate, 0);
         // Runs made without the walking check cannot say when they first walked.
         let checked = mine.iter().filter(|r| r.checked).count();
         let walked_text = if checked == 0 {
@@ -293,8 +329,11 @@ fn per_arm(study: &Study, rows: &[RunRow]) -> Result<(String, Vec<Value>)> {
             format!("{} of {checked}", walked.len())
         };
         md.push_str(&format!(
-            "| {} | {n} | {k} | {rate_text} | {} | {walked_text} | {} |\n",
+            "| {} | {n} | {k} | {rate_text} | {clean} of {n}: {} | {} | {} | {walked_text} | {} \
+             |\n",
             arm.name,
+            percent_interval(&clean_rate, 0),
+            percent_interval(&falls, 1),
             interval_text(&bw_iqm, 0, 1.0),
             steps_iqm.map_or("–".into(), |i| interval_text(&i, 2, 1e-6) + " M"),
         ));
@@ -303,6 +342,9 @@ fn per_arm(study: &Study, rows: &[RunRow]) -> Result<(String, Vec<Value>)> {
             "runs": n,
             "at_bar": k,
             "rate": rate,
+            "finished_every_episode": clean,
+            "finished_every_episode_rate": clean_rate,
+            "falls_per_episode": falls,
             "best_win_50_iqm": bw_iqm,
             "walked_in_training": walked.len(),
             "checked_in_training": checked,
@@ -495,4 +537,61 @@ fn read_csv_curve(path: &Path) -> Result<(Vec<f64>, Option<f64>)> {
         q0.extend(q.and_then(value));
     }
     Ok((curve, esrl_metrics::q0_mean(&q0)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A walking run of arm `a` over `episodes` starts, `finished` of them past the line and
+    /// `falls` ending in a fall.
+    fn row(seed: u64, finished: usize, falls: usize, episodes: usize) -> RunRow {
+        RunRow {
+            arm: "a".into(),
+            seed,
+            at_bar: true,
+            classes: format!("walk {episodes}"),
+            finished,
+            falls,
+            episodes,
+            track_time: Some(38.0),
+            speed: 1.3,
+            sway: 0.02,
+            knee_asymmetry: 0.05,
+            knee_flexion_deg: Some(60.0),
+            double_support: Some(0.1),
+            checked: true,
+            steps_to_walk: Some(2e6),
+            time_to_walk_s: Some(900.0),
+            env_steps: 3_000_000,
+            wall_s: 1000.0,
+            best_win_50: 50.0,
+            restarted_as: None,
+        }
+    }
+
+    #[test]
+    fn per_arm_counts_the_runs_that_finish_every_episode_and_the_falls_per_episode() {
+        let study = Study::parse("seeds = 3\n[[arm]]\nname = \"a\"\nagent = \"es-sac\"\n").unwrap();
+        // Three runs of 20 episodes: one finishes all 20; one falls once (19 past the line);
+        // one stops short of the line twice without falling (18). One run in three finishes
+        // every episode; falls per episode (0 + 1/20 + 0) / 3 = 1/60.
+        let rows = [row(0, 20, 0, 20), row(1, 19, 1, 20), row(2, 18, 0, 20)];
+        let (md, json) = per_arm(&study, &rows).unwrap();
+        let arm = &json[0];
+        assert_eq!(arm["finished_every_episode"], 1);
+        let rate: Interval =
+            serde_json::from_value(arm["finished_every_episode_rate"].clone()).unwrap();
+        assert_eq!(rate, wilson(1, 3, Z95).unwrap());
+        let falls: Interval = serde_json::from_value(arm["falls_per_episode"].clone()).unwrap();
+        assert!((falls.estimate - 1.0 / 60.0).abs() < 1e-15, "{falls:?}");
+        // Resampling the runs: no falls when the falling run is never drawn (probability
+        // (2/3)³ ≈ 0.30 a resample), 1/20 when it is drawn three times (1/27 ≈ 0.037).
+        assert_eq!(falls.lo, 0.0, "{falls:?}");
+        assert!((falls.hi - 0.05).abs() < 1e-15, "{falls:?}");
+        assert!(
+            md.contains("| 1 of 3: 33 % [6–79 %] | 1.7 % [0.0–5.0 %] |"),
+            "{md}"
+        );
+    }
 }

@@ -173,6 +173,9 @@ fn write_record(run: &Path, record: &Path, eval: &StudyEval) -> Result<()> {
     if eval.undisturbed {
         loaded = loaded.undisturbed()?;
     }
+    if eval.default_starts {
+        loaded = loaded.default_starts()?;
+    }
     let mut report = evaluate_with(
         &loaded,
         eval.seed,
@@ -184,6 +187,7 @@ fn write_record(run: &Path, record: &Path, eval: &StudyEval) -> Result<()> {
         },
     )?;
     report.undisturbed = eval.undisturbed;
+    report.default_starts = eval.default_starts;
     let tmp = record.with_extension("tmp");
     if tmp.exists() {
         fs::remove_dir_all(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
