@@ -344,6 +344,65 @@ episodes = 100000
     assert!(!out.join("records/long-s0").exists());
 }
 
+/// A run trained before the study (by `esrl train` into the study's `runs/` folder, or by an
+/// earlier `esrl study run` stopped before it wrote the record) is recorded before any
+/// training starts: a study stopped during its first training keeps that record.
+#[test]
+fn runs_finished_before_the_study_are_recorded_first() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = tmp.path().join("two.toml");
+    std::fs::write(
+        &study,
+        r#"
+seeds = [0]
+[eval]
+episodes = 1
+[[arm]]
+name = "long"
+agent = "sac"
+preset = "smoke"
+episodes = 100000
+[[arm]]
+name = "short"
+agent = "sac"
+preset = "smoke"
+episodes = 2
+"#,
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    common::smoke(
+        "sac",
+        &out.join("runs/short-s0"),
+        &["--episodes", "2", "--seed", "0"],
+    );
+    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
+        .args(["study", "run", study.to_str().unwrap(), "--out"])
+        .arg(&out)
+        .args(["--jobs", "1", "--no-progress"])
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    let record = out.join("records/short-s0/eval.json");
+    let long = out.join("runs/long-s0/metrics.jsonl");
+    while !(record.is_file() && long.is_file()) {
+        assert!(
+            started.elapsed() < Duration::from_secs(120),
+            "no record of the run trained before the study while the study trains"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(child.try_wait().unwrap(), None, "the long run still trains");
+    Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert_eq!(child.wait().unwrap().code(), Some(130));
+    assert!(record.is_file());
+    assert!(!out.join("records/long-s0").exists());
+}
+
 /// `{seed}` in an arm's `init` is the run's seed: each seed of a fine-tuning study starts from
 /// its own policy, and a missing one is named.
 #[test]

@@ -51,11 +51,11 @@
 //!
 //! `esrl study run` trains every run that is not finished (resuming interrupted ones from
 //! their checkpoint; `--jobs N` at a time), evaluates its handed-over policy and writes its
-//! record; finished runs and written records are reused, so the same command continues a
-//! stopped study and gives the records an uninterrupted one would. `--shard i/n` takes the
-//! runs whose index (arms in order, seeds within) is i modulo n: n machines each run one
-//! shard into their own `DIR`, and the records folders merge by copying. The report reads
-//! records only.
+//! record (runs found finished are recorded before any training starts); finished runs and
+//! written records are reused, so the same command continues a stopped study and gives the
+//! records an uninterrupted one would. `--shard i/n` takes the runs whose index (arms in
+//! order, seeds within) is i modulo n: n machines each run one shard into their own `DIR`,
+//! and the records folders merge by copying. The report reads records only.
 
 mod report;
 mod run;

@@ -117,6 +117,22 @@ pub(crate) fn run_study(
         Ok(())
     };
     let mut failures = Vec::new();
+    // Runs that had finished before this command are recorded first, so a study stopped
+    // during the trainings keeps them (runs trained here are recorded as they finish).
+    for p in plans
+        .iter()
+        .filter(|p| !pending.iter().any(|q| q.dir == p.dir))
+    {
+        if run_state(&p.dir)? != RunState::Finished {
+            continue;
+        }
+        if crate::signals::requested().is_some() {
+            break;
+        }
+        if let Err(e) = record_of(p) {
+            failures.push(format!("{}: {e:#}", p.name()));
+        }
+    }
     if !pending.is_empty() {
         let progress = jobs == 1 && !no_progress;
         for (p, r) in pending
@@ -134,17 +150,6 @@ pub(crate) fn run_study(
              checkpoints and the same command continues the study",
             failures.join("\n  ")
         );
-    }
-    for p in &plans {
-        if run_state(&p.dir)? != RunState::Finished {
-            continue;
-        }
-        if pending.iter().any(|q| q.dir == p.dir) {
-            continue; // recorded (or failed) as it finished
-        }
-        if let Err(e) = record_of(p) {
-            failures.push(format!("{}: {e:#}", p.name()));
-        }
     }
     if !failures.is_empty() {
         bail!(
