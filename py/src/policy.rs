@@ -104,10 +104,17 @@ impl PolicyCore {
     /// `esrl eval RUN`; `last`: its newest complete checkpoint, as `esrl eval --last`), or a
     /// checkpoint, `best/` or record `policy/` folder as given; `undisturbed`: on the run's
     /// task without its training-time disturbances (`[walk.perturb]`, as `esrl eval
-    /// --undisturbed`).
+    /// --undisturbed`); `default_starts`: from the task's standard starts (`walk.init_noise`
+    /// and `walk.reset` at their defaults, as `esrl eval --default-starts`).
     #[staticmethod]
-    #[pyo3(signature = (path, undisturbed=false, last=false))]
-    fn load(py: Python<'_>, path: PathBuf, undisturbed: bool, last: bool) -> PyResult<Self> {
+    #[pyo3(signature = (path, undisturbed=false, last=false, default_starts=false))]
+    fn load(
+        py: Python<'_>,
+        path: PathBuf,
+        undisturbed: bool,
+        last: bool,
+        default_starts: bool,
+    ) -> PyResult<Self> {
         check_exists(&path)?;
         let pick = if last {
             esrl_eval::Pick::Last
@@ -121,6 +128,9 @@ impl PolicyCore {
             let mut walk = loaded.config.walk.clone();
             walk.perturb = esrl_sim::Perturb::default();
             loaded = loaded.with_walk(walk).map_err(run_error)?;
+        }
+        if default_starts {
+            loaded = loaded.default_starts().map_err(run_error)?;
         }
         let (obs_dim, act_dim) = (loaded.agent.obs_dim(), loaded.agent.act_dim());
         let stepper = Stepper {

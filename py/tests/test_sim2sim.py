@@ -226,6 +226,29 @@ def test_a_policy_trained_under_disturbances_is_checked_on_the_plain_task() -> N
     assert own["mean_forward_velocity"] != pytest.approx(g["mean_forward_velocity"])
 
 
+def test_a_policy_trained_from_wider_starts_is_checked_from_the_standard_ones(capsys) -> None:
+    """`--default-starts`: both engines start where `esrl eval --default-starts` does. The
+    policy trained from wider starts (`results/unseen-starts/noise5.toml`); its committed
+    `eval20.json` was written by `esrl eval RUN --default-starts --episodes 20 --seed 1000`."""
+    wide = FLAGSHIP.parents[1] / "unseen-starts" / "noise5-s0"
+    policy = wide / "policy"
+    standard = esrl_rs.load_policy(policy, default_starts=True)
+    assert standard._core.walk_config["init_noise"] != \
+        esrl_rs.load_policy(policy)._core.walk_config["init_noise"]
+    committed = json.loads((wide / "eval20.json").read_text(encoding="utf-8"))
+    assert committed["default_starts"] is True
+    mine = standard.evaluate(1, 1000)["episodes"][0]
+    assert mine["return"] == pytest.approx(committed["episodes"][0]["return"], rel=1e-12)
+    assert main([str(policy), "--episodes", "1", "--seed", "1000", "--default-starts",
+                 "--json"]) == 0
+    r = json.loads(capsys.readouterr().out)
+    assert r["default_starts"] is True
+    assert r["esrl"]["speed"] == pytest.approx(mine["gait"]["mean_forward_velocity"])
+    own = cross_check(str(policy), episodes=1, seed=1000)
+    assert own["default_starts"] is False
+    assert own["esrl"]["speed"] != pytest.approx(r["esrl"]["speed"])
+
+
 def test_a_run_folder_is_checked_on_its_kept_policy(cli_train, capsys) -> None:
     """Given a run folder, sim2sim runs the policy `esrl eval RUN` takes (`RUN/best/`);
     `--last` its newest checkpoint; the JSON names the folder the weights came from."""

@@ -116,7 +116,8 @@ class EnvCore:
 
 class PolicyCore:
     @staticmethod
-    def load(path: _Path, undisturbed: bool = ...) -> "PolicyCore": ...
+    def load(path: _Path, undisturbed: bool = ..., last: bool = ...,
+             default_starts: bool = ...) -> "PolicyCore": ...
     @property
     def agent(self) -> str: ...
     @property

@@ -25,7 +25,7 @@ class Policy:
 
     @classmethod
     def load(cls, path: Union[str, "os.PathLike[str]"], undisturbed: bool = False,
-             last: bool = False) -> "Policy":
+             last: bool = False, default_starts: bool = False) -> "Policy":
         """Loads a run folder (the policy it hands over, as ``esrl eval RUN``: its kept
         policy ``RUN/best/`` when it has one, else its newest complete checkpoint; ``last``:
         the newest checkpoint, as ``esrl eval --last``), a checkpoint or ``best/`` folder,
@@ -33,9 +33,12 @@ class Policy:
         ``actor.safetensors`` and its ``config.toml``; it has no critics, so :meth:`q0`
         raises ``ValueError`` there). ``undisturbed``: on the run's task without its
         training-time disturbances (``[walk.perturb]``; ``esrl eval --undisturbed``).
-        Raises ``FileNotFoundError`` (no folder, no checkpoint) or ``ValueError`` (a
+        ``default_starts``: from the task's standard starts (``walk.init_noise`` and
+        ``walk.reset`` at their defaults; ``esrl eval --default-starts``), for a policy
+        trained from other starts. Raises ``FileNotFoundError`` (no folder, no checkpoint) or ``ValueError`` (a
         config or checkpoint that cannot be used)."""
-        return cls(PolicyCore.load(os.fspath(path), bool(undisturbed), bool(last)))
+        return cls(PolicyCore.load(os.fspath(path), bool(undisturbed), bool(last),
+                                   bool(default_starts)))
 
     def __repr__(self) -> str:
         return f"Policy(agent={self.agent!r}, env={self.env!r}, checkpoint={self.checkpoint!r})"
@@ -115,6 +118,6 @@ class Policy:
 
 
 def load_policy(path: Union[str, "os.PathLike[str]"], undisturbed: bool = False,
-                last: bool = False) -> Policy:
+                last: bool = False, default_starts: bool = False) -> Policy:
     """:meth:`Policy.load`."""
-    return Policy.load(path, undisturbed, last)
+    return Policy.load(path, undisturbed, last, default_starts)

@@ -407,25 +407,28 @@ def _summary(gaits: List[Dict[str, Any]], past_limit: Sequence[float]) -> Dict[s
 
 def cross_check(path: str, episodes: int = 10, seed: int = 0, cone: str = "pyramidal",
                 servo: str = "explicit", last: bool = False,
-                limits: str = "soft") -> Dict[str, Any]:
+                limits: str = "soft", default_starts: bool = False) -> Dict[str, Any]:
     """The policy in ``path`` (a run folder's kept policy, or with ``last`` its newest
     checkpoint, as ``esrl eval``; a checkpoint, ``best/`` or record ``policy/`` folder)
     from reset seeds ``seed … seed + episodes − 1`` in esrl (``Policy.evaluate``, the code
     of ``esrl eval``) and on MuJoCo (:class:`MujocoWalk` with ``cone`` and ``servo``): both
     engines' gait metrics (:func:`esrl_rs.metrics.gait_metrics`), summarised per engine and
-    per episode. ``limits``: MuJoCo's joint limits (:data:`LIMITS`)."""
-    return cross_checks(path, episodes, seed, [(cone, servo, limits)], last)[0]
+    per episode. ``limits``: MuJoCo's joint limits (:data:`LIMITS`). ``default_starts``:
+    both engines from the task's standard starts (``esrl eval --default-starts``), for a
+    policy trained from other starts."""
+    return cross_checks(path, episodes, seed, [(cone, servo, limits)], last, default_starts)[0]
 
 
 def cross_checks(path: str, episodes: int, seed: int,
-                 settings: Sequence[Sequence[str]], last: bool = False) -> List[Dict[str, Any]]:
+                 settings: Sequence[Sequence[str]], last: bool = False,
+                 default_starts: bool = False) -> List[Dict[str, Any]]:
     """:func:`cross_check` under each ``(cone, servo)`` or ``(cone, servo, limits)`` of
     ``settings``, esrl's episodes run once."""
     from .policy import load_policy
 
     # Both engines run the plain task: a policy trained under disturbances ([walk.perturb])
     # is cross-checked without them, as `esrl eval --undisturbed` evaluates it.
-    policy = load_policy(path, undisturbed=True, last=last)
+    policy = load_policy(path, undisturbed=True, last=last, default_starts=default_starts)
     if policy.env != "walk":
         raise ValueError(f"{path}: a {policy.env} run; sim2sim is for the walking task")
     walk = policy._core.walk_config
@@ -455,7 +458,7 @@ def cross_checks(path: str, episodes: int, seed: int,
             mj_past.append(_past_limit_deg(t["joint_angles"], t["joint_limits"]))
         out.append({
             "policy": os.fspath(path), "checkpoint": policy.checkpoint, "seed": seed,
-            "episodes": episodes,
+            "episodes": episodes, "default_starts": default_starts,
             "mujoco_settings": {"cone": cone, "servo": env.servo, "action": env.mode,
                                 "limits": limits},
             "esrl": _summary(ours, ours_past), "mujoco": _summary(mj, mj_past),
@@ -494,7 +497,9 @@ def _tables(results: Sequence[Dict[str, Any]]) -> str:
         if k == 0 or r["policy"] != results[k - 1]["policy"]:
             if parts:
                 parts.append("")
-            parts += [f"{r['policy']} ({r['episodes']} starts from reset seed {r['seed']})", "",
+            standard = ", the task's standard starts" if r.get("default_starts") else ""
+            parts += [f"{r['policy']} ({r['episodes']} starts from reset seed {r['seed']}"
+                      f"{standard})", "",
                       _HEADER, _row("esrl (Rapier)", r["esrl"])]
         st = r["mujoco_settings"]
         how = f"{st['servo']} servo" if st.get("action", "target") == "target" else "torques"
@@ -526,6 +531,10 @@ def main(argv: Optional[List[str]] = None) -> int:
                     help="MuJoCo's joint limits: soft (the default, MuJoCo's own: torque can "
                     "push a joint far past its limit), stiff (the stiffest MuJoCo allows: a few "
                     "degrees past, as esrl's own limits) or all: both")
+    ap.add_argument("--default-starts", action="store_true",
+                    help="from the task's standard starts (walk.init_noise and walk.reset at "
+                    "their defaults, as esrl eval --default-starts), for a policy trained from "
+                    "other starts")
     ap.add_argument("--json", action="store_true", help="print the result as JSON")
     a = ap.parse_args(argv)
     try:
@@ -544,7 +553,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     results: List[Dict[str, Any]] = []
     try:
         for p in a.policy:
-            results += cross_checks(p, a.episodes, a.seed, settings, a.last)
+            results += cross_checks(p, a.episodes, a.seed, settings, a.last, a.default_starts)
     except (ValueError, OSError, _native.EsrlError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
