@@ -14,10 +14,19 @@ use rand_chacha::ChaCha8Rng;
 /// Runs `esrl record`.
 pub fn run(args: &RecordArgs) -> Result<()> {
     check_output(&args.out, args.force)?;
-    let svg = args
+    let extension = args
         .out
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let svg = match extension.as_deref() {
+        Some("svg") => true,
+        Some("mcap") => false,
+        _ => bail!(
+            "--out {}: name the file FILE.mcap (a recording for Foxglove) or FILE.svg (an \
+             animated side view); the extension says which to write",
+            args.out.display()
+        ),
+    };
     let pick = if args.last { Pick::Last } else { Pick::Kept };
     let loaded = load_run_pick(&args.path, pick)?;
     eprintln!("recording {}", crate::eval::which_policy(&loaded));

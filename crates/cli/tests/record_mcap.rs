@@ -2,7 +2,8 @@
 //! esrl-record's reader: the Foxglove schema names and encodings, one scene, one transform and
 //! one message per scalar topic for every step of the rollout (as many as `esrl eval` counts
 //! for the same seed), timestamps at k × 25 ms, every schema-required field present, the
-//! reward terms summing to the total; a pendulum run is refused.
+//! reward terms summing to the total; a pendulum run is refused, and so is an output named
+//! neither `.mcap` nor `.svg`.
 
 use esrl_record::{
     channels, foxglove_schema_problems, message_problems, read_channel, read_file, read_scalars,
@@ -174,4 +175,37 @@ fn pendulum_runs_are_refused() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("pendulum run"), "{err}");
     assert!(!file.exists());
+}
+
+#[test]
+fn an_output_that_is_neither_mcap_nor_svg_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("w");
+    smoke("es-sac", &run, &[]);
+    for name in ["walk.xyz", "walk", "walk.mcap.bak"] {
+        let file = tmp.path().join(name);
+        let out = esrl(&[
+            "record",
+            run.to_str().unwrap(),
+            "--out",
+            file.to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(1), "{name}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("FILE.mcap") && err.contains("FILE.svg"),
+            "{err}"
+        );
+        assert!(!file.exists(), "{name} was written");
+    }
+    // Either extension in capitals is taken.
+    let file = tmp.path().join("walk.MCAP");
+    let out = esrl(&[
+        "record",
+        run.to_str().unwrap(),
+        "--out",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(file.is_file());
 }
