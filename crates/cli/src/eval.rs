@@ -20,6 +20,12 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     if let Some(out) = &args.out {
         check_output(out, args.force)?;
     }
+    if let Some(dir) = args.record.as_deref().filter(|d| d.exists() && !d.is_dir()) {
+        bail!(
+            "--record {}: not a folder (the recordings go into DIR/episode-NNN.mcap)",
+            dir.display()
+        );
+    }
     let perturb = args
         .perturb
         .iter()

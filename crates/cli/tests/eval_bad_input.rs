@@ -1,6 +1,6 @@
 //! Contract: `esrl eval` and `esrl record` answer bad input — a missing folder, a folder that
 //! is no run, a corrupt config, a run without checkpoint, a checkpoint of another architecture,
-//! zero episodes — with a non-zero exit and a message naming the file, never a panic, and
+//! zero episodes, a file where `--record` wants a folder — with a non-zero exit and a message naming the file, never a panic, and
 //! leave the run's files as they were.
 
 mod common;
@@ -38,6 +38,12 @@ fn bad_inputs_fail_cleanly() {
     let run = t("run");
     train("es-sac", &run, &[]);
     fails(&["eval", &s(&run), "--episodes", "0"], &["--episodes 0"]);
+    std::fs::write(t("afile"), "keep").unwrap();
+    fails(
+        &["eval", &s(&run), "--record", &s(&t("afile"))],
+        &["--record", "afile", "not a folder"],
+    );
+    assert_eq!(std::fs::read_to_string(t("afile")).unwrap(), "keep");
     let config = std::fs::read_to_string(run.join("config.toml")).unwrap();
     std::fs::write(run.join("config.toml"), "agent = \"es-sac\"\nnonsense = [").unwrap();
     fails(&["eval", &s(&run)], &["config.toml"]);

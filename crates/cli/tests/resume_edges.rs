@@ -1,7 +1,8 @@
 //! Contract: `--resume` cannot silently change a run (its seed, env or URDF), keeps
 //! `config.toml` true when the budget is raised (so `--config RUN/config.toml` still repeats
 //! the run), and a run stopped before its first checkpoint is not a dead end: `--resume`
-//! starts it over, and `--out` on it says how.
+//! starts it over, and `--out` on it says how; a folder that holds a policy but no run is
+//! refused.
 
 mod common;
 
@@ -71,4 +72,36 @@ fn a_run_without_checkpoint_restarts_on_resume() {
     let f = args(fresh.to_str().unwrap());
     ok(&f.iter().map(String::as_str).collect::<Vec<_>>());
     assert_eq!(rows(&run), rows(&fresh));
+}
+
+/// A folder that holds a policy but no run (a run's `best/` or `checkpoint/` given directly,
+/// a study record's `policy/`) is refused by `--resume`, which would have started a new run
+/// in it, and is left as it was.
+#[test]
+fn a_policy_folder_is_not_resumed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("run");
+    smoke("es-sac", &run, &["--generations", "2"]);
+    let record = tmp.path().join("policy");
+    std::fs::create_dir(&record).unwrap();
+    for f in ["actor.safetensors", "config.toml"] {
+        std::fs::copy(run.join("best").join(f), record.join(f)).unwrap();
+    }
+    let listing = |dir: &std::path::Path| {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        names
+    };
+    for dir in [run.join("best"), run.join("checkpoint"), record] {
+        let before = listing(&dir);
+        let err = fails(&["train", "es-sac", "--resume", dir.to_str().unwrap()]);
+        assert!(
+            err.contains("holds a policy, not a run") && err.contains("--init"),
+            "{err}"
+        );
+        assert_eq!(listing(&dir), before, "{} changed", dir.display());
+    }
 }

@@ -105,6 +105,26 @@ pub fn plan(req: &TrainRequest) -> Result<TrainPlan> {
             RunDir::CONFIG
         );
     }
+    // A policy folder (a run's best/ or checkpoint/ given directly, a study record's
+    // policy/) has a config.toml too, but no run to continue: training there would write a
+    // new run's files into it.
+    let ran = dir.join(RunDir::JSONL).exists()
+        || checkpoint::find(dir).is_some()
+        || dir.join(restart::RESTARTS_FILE).exists();
+    let weights = ["agent.safetensors", "actor.safetensors"]
+        .iter()
+        .any(|f| dir.join(f).is_file());
+    if weights && !ran {
+        bail!(
+            "{dir} holds a policy, not a run (no {} and no checkpoint): nothing to resume. \
+             Resume the run folder it came from, or fine-tune from it into a new folder: \
+             `{esrl} train {agent} --init {dir} --out DIR`",
+            RunDir::JSONL,
+            dir = dir.display(),
+            esrl = crate::command(),
+            agent = req.agent.name(),
+        );
+    }
     let (mut cfg, legacy) = checkpoint::run_config(dir)?;
     if cfg.agent != req.agent {
         bail!(
