@@ -1,7 +1,7 @@
 //! Contract: `esrl eval` and `esrl record` answer bad input — a missing folder, a folder that
 //! is no run, a corrupt config, a run without checkpoint, a checkpoint of another architecture,
-//! zero episodes, a file where `--record` wants a folder — with a non-zero exit and a message naming the file, never a panic, and
-//! leave the run's files as they were.
+//! zero episodes, a file where `--record` wants a folder — with a non-zero exit and a message
+//! naming the file, never a panic, and leave the run's files as they were.
 
 mod common;
 
