@@ -237,8 +237,8 @@ def test_report_refuses_to_pool_different_configurations(tmp_path: Path) -> None
 def test_study_and_robustness_figures(tmp_path) -> None:
     """The study figures from a report.json and the robustness figure from a card."""
     pytest.importorskip("matplotlib")
-    from esrl_rs.study import (check_series, checks_figure, performance_profile,
-                               robustness_figure, study_figures)
+    from esrl_rs.study import (check_series, checks_figure, interval_panels,
+                               performance_profile, robustness_figure, study_figures)
 
     np.testing.assert_array_equal(performance_profile([1.0, 2.0, 3.0], np.array([0.0, 1.5, 3.0])),
                                   [1.0, 2 / 3, 0.0])
@@ -256,6 +256,16 @@ def test_study_and_robustness_figures(tmp_path) -> None:
     }))
     files = study_figures(study, tmp_path / "out", dpi=40)
     assert [f.name for f in files] == ["study_intervals.png", "study_profiles.png"]
+    # A report written before the reliability columns: two panels; with them, four.
+    arm = json.loads((study / "report.json").read_text())["arms"][0]
+    assert [p[0] for p in interval_panels([arm])] == ["rate", "best_win_50_iqm"]
+    arm.update(finished_every_episode=1, finished_every_episode_rate=interval,
+               falls_per_episode={"estimate": 0.02, "lo": 0.0, "hi": 0.05})
+    assert [p[0] for p in interval_panels([arm])] == [
+        "rate", "finished_every_episode_rate", "falls_per_episode", "best_win_50_iqm"]
+    (study / "report.json").write_text(json.dumps({
+        "arms": [arm], "runs": [{"arm": "a", "best_win_50": 8.0}]}))
+    assert study_figures(study, tmp_path / "four", dpi=40)[0].is_file()
     with pytest.raises(ValueError, match="no run with a checks.jsonl"):
         checks_figure(study, tmp_path / "out")
     # Two checks of one run: the classes of both, zero where a check had none.

@@ -1,7 +1,8 @@
 """Figures of a study folder and of a robustness card.
 
 - :func:`study_figures`: from ``DIR/report.json`` (``esrl study report DIR``), per arm the
-  rate at the walking bar with its Wilson 95 % interval and the IQM of Best-Win-50 with its
+  rate at the walking bar and the share of runs whose policy finishes every start, each with
+  its Wilson 95 % interval, the falls per episode and the IQM of Best-Win-50, each with its
   bootstrap 95 % interval (``study_intervals.png``), and the performance profiles of
   Best-Win-50: for every score τ, the share of an arm's runs that score above it
   (``study_profiles.png``; Agarwal et al. 2021, "Deep RL at the Edge of the Statistical
@@ -23,12 +24,12 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from typing import Any, Dict, List, Sequence, Union
+from typing import Any, Dict, List, Sequence, Tuple, Union
 
 import numpy as np
 
-__all__ = ["check_series", "checks_figure", "performance_profile", "robustness_figure",
-           "study_figures"]
+__all__ = ["check_series", "checks_figure", "interval_panels", "performance_profile",
+           "robustness_figure", "study_figures"]
 
 PathLike = Union[str, Path]
 
@@ -142,6 +143,22 @@ def _plt() -> Any:
     return plt
 
 
+def interval_panels(arms: Sequence[Dict[str, Any]]) -> List[Tuple[str, str, float]]:
+    """The panels of ``study_intervals.png`` for the per-arm entries of a ``report.json``:
+    (key, axis label, scale) of the rate at the walking bar and the IQM of Best-Win-50, and,
+    when every arm has them (reports written since they were added), the share of runs whose
+    policy finished every start and the falls per episode."""
+    panels = [("rate", "runs at the walking bar (%), Wilson 95 % interval", 100.0)]
+    if all("finished_every_episode_rate" in a for a in arms):
+        panels.append(("finished_every_episode_rate",
+                       "runs that finish every start (%), Wilson 95 %", 100.0))
+    if all("falls_per_episode" in a for a in arms):
+        panels.append(("falls_per_episode",
+                       "falls per episode (%), bootstrap 95 % over runs", 100.0))
+    panels.append(("best_win_50_iqm", "IQM of Best-Win-50, bootstrap 95 % interval", 1.0))
+    return panels
+
+
 def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Path]:
     """The figures of a study folder (module docs) into ``out``, the checks figure when its
     records have checks; returns their paths. A folder without ``report.json`` raises
@@ -159,23 +176,26 @@ def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Pa
     plt = _plt()
     files = []
 
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 0.6 * len(arms) + 1.8))
+    panels = interval_panels(arms)
+    rows = (len(panels) + 1) // 2
+    fig, axes = plt.subplots(rows, 2, figsize=(10, rows * (0.6 * len(arms) + 1.8)),
+                             squeeze=False)
     y = np.arange(len(arms))
-    for i, a in enumerate(arms):
-        r = a["rate"]
-        ax1.errorbar(100 * r["estimate"], i, xerr=[[100 * (r["estimate"] - r["lo"])],
-                                                   [100 * (r["hi"] - r["estimate"])]],
-                     fmt="o", capsize=4, color=f"C{i}")
-        b = a["best_win_50_iqm"]
-        ax2.errorbar(b["estimate"], i, xerr=[[b["estimate"] - b["lo"]], [b["hi"] - b["estimate"]]],
-                     fmt="o", capsize=4, color=f"C{i}")
-    for ax in (ax1, ax2):
+    for ax, (key, label, scale) in zip(axes.flat, panels):
+        for i, a in enumerate(arms):
+            v = a[key]
+            ax.errorbar(scale * v["estimate"], i,
+                        xerr=[[scale * (v["estimate"] - v["lo"])],
+                              [scale * (v["hi"] - v["estimate"])]],
+                        fmt="o", capsize=4, color=f"C{i}")
         ax.set_yticks(y, [f"{a['arm']} ({a['at_bar']}/{a['runs']})" for a in arms])
         ax.invert_yaxis()
         ax.grid(axis="x", alpha=0.3)
-    ax1.set_xlim(-2, 102)
-    ax1.set_xlabel("runs at the walking bar (%), Wilson 95 % interval")
-    ax2.set_xlabel("IQM of Best-Win-50, bootstrap 95 % interval")
+        ax.set_xlabel(label)
+        if key == "falls_per_episode":
+            ax.set_xlim(left=-0.05 * max(100.0 * a[key]["hi"] for a in arms) - 0.05)
+        elif scale == 100.0:
+            ax.set_xlim(-2, 102)
     fig.tight_layout()
     files.append(_save(fig, out, "study_intervals.png", dpi))
 
