@@ -481,4 +481,13 @@ set = { walk = { gait_clock = { period = 0.8 }, init_noise = { joint_angle = 0.1
         report.contains("from the task's standard starts"),
         "{report}"
     );
+    // Every run's torso pitch: the evaluation's mean, in degrees.
+    let figures = read_json(&out.join("report.json"));
+    let pitch = recorded["mean"]["gait"]["torso_pitch"]["mean"]
+        .as_f64()
+        .unwrap();
+    assert_eq!(
+        figures["runs"][0]["torso_pitch_deg"].as_f64().unwrap(),
+        pitch.to_degrees()
+    );
 }

@@ -57,6 +57,9 @@ struct RunRow {
     knee_asymmetry: f64,
     knee_flexion_deg: Option<f64>,
     double_support: Option<f64>,
+    /// Mean torso pitch, degrees, forward lean positive (records evaluated before esrl
+    /// measured it have none).
+    torso_pitch_deg: Option<f64>,
     /// Whether the run checked policies against the walking bar while it trained.
     checked: bool,
     steps_to_walk: Option<f64>,
@@ -109,6 +112,9 @@ fn run_row(study: &Study, rec: &Record) -> RunRow {
         knee_asymmetry: g.map_or(f64::NAN, |g| g.knee_torque_asymmetry),
         knee_flexion_deg: knee_flexion(&rec.eval),
         double_support: g.and_then(|g| g.cycle.as_ref()).map(|c| c.double_support),
+        torso_pitch_deg: g
+            .and_then(|g| g.torso_pitch.as_ref())
+            .map(|p| p.mean.to_degrees()),
         checked: figure("checks").is_some_and(|c| c > 0.0),
         steps_to_walk: figure("steps_to_walk"),
         time_to_walk_s: figure("time_to_walk_s"),
@@ -404,18 +410,19 @@ fn every_run(rows: &[RunRow]) -> (String, String) {
     let mut md = String::new();
     md.push_str(
         "\n## Every run\n\n| run | at bar | gait classes | finished | falls | track time (s) | \
-         speed (m/s) | sway (m) | knee asym. | knee flexion (°) | double support | steps to \
-         walk | env steps | wall (s) |\n|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:\
-         |---:|---:|\n",
+         speed (m/s) | sway (m) | knee asym. | knee flexion (°) | double support | torso pitch \
+         (°) | steps to walk | env steps | wall (s) |\n|---|---|---|---:|---:|---:|---:|---:|---:\
+         |---:|---:|---:|---:|---:|---:|\n",
     );
     let mut csv = String::from(
         "arm,seed,at_bar,classes,finished,falls,episodes,track_time,speed,sway,knee_asymmetry,\
-         knee_flexion_deg,double_support,steps_to_walk,time_to_walk_s,env_steps,wall_s,\
-         best_win_50\n",
+         knee_flexion_deg,double_support,torso_pitch_deg,steps_to_walk,time_to_walk_s,env_steps,\
+         wall_s,best_win_50\n",
     );
     for r in rows {
         md.push_str(&format!(
-            "| {}-s{}{} | {} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.0} |\n",
+            "| {}-s{}{} | {} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.0} \
+             |\n",
             r.arm,
             r.seed,
             r.restarted_as
@@ -431,13 +438,14 @@ fn every_run(rows: &[RunRow]) -> (String, String) {
             fmt(Some(100.0 * r.knee_asymmetry), 1) + " %",
             fmt(r.knee_flexion_deg, 0),
             fmt(r.double_support.map(|d| 100.0 * d), 1) + " %",
+            fmt(r.torso_pitch_deg, 1),
             r.steps_to_walk
                 .map_or("–".into(), |s| format!("{:.2} M", s / 1e6)),
             r.env_steps,
             r.wall_s
         ));
         csv.push_str(&format!(
-            "{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             r.arm,
             r.seed,
             r.at_bar,
@@ -451,6 +459,7 @@ fn every_run(rows: &[RunRow]) -> (String, String) {
             fmt(Some(r.knee_asymmetry), 4),
             fmt(r.knee_flexion_deg, 2),
             fmt(r.double_support, 4),
+            fmt(r.torso_pitch_deg, 2),
             fmt(r.steps_to_walk, 0),
             fmt(r.time_to_walk_s, 1),
             r.env_steps,
@@ -560,6 +569,7 @@ mod tests {
             knee_asymmetry: 0.05,
             knee_flexion_deg: Some(60.0),
             double_support: Some(0.1),
+            torso_pitch_deg: Some(-8.0),
             checked: true,
             steps_to_walk: Some(2e6),
             time_to_walk_s: Some(900.0),
