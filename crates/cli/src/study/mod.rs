@@ -382,8 +382,12 @@ fn describe_eval(r: &EvalReport) -> String {
         .as_ref()
         .and_then(|g| g.cycle.as_ref())
         .map_or("-".into(), |c| gait_classes_text(&c.gait_classes));
+    let falls = match r.mean.falls {
+        1 => "1 fall".to_string(),
+        n => format!("{n} falls"),
+    };
     format!(
-        "{classes}; {}/{} finished, {} falls",
-        r.mean.finished, r.mean.episodes, r.mean.falls
+        "{classes}; {}/{} finished, {falls}",
+        r.mean.finished, r.mean.episodes
     )
 }
