@@ -455,17 +455,9 @@ set = { walk = { gait_clock = { period = 0.8 }, init_noise = { joint_angle = 0.1
         ];
         args.extend(extra);
         ok(&args);
-        // The episodes without q0 (the record's policy folder holds the actor alone).
-        let mut episodes = read_json(&file)["episodes"].clone();
-        for e in episodes.as_array_mut().unwrap() {
-            e.as_object_mut().unwrap().remove("q0");
-        }
-        episodes
+        common::episodes_without_q0(&read_json(&file))
     };
-    let mut kept = recorded["episodes"].clone();
-    for e in kept.as_array_mut().unwrap() {
-        e.as_object_mut().unwrap().remove("q0");
-    }
+    let kept = common::episodes_without_q0(&recorded);
     let standard = eval(&["--default-starts"], "standard.json");
     assert!(
         kept == standard,

@@ -170,14 +170,7 @@ set = { walk = { perturb = { obs_noise = 0.3, friction_range = [0.5, 1.0] } } }
         args.extend(extra);
         eval_json(&policy, &args, &tmp.path().join(name))
     };
-    // The episodes without q0 (the record's policy folder holds the actor alone).
-    let episodes = |report: serde_json::Value| {
-        let mut e = report["episodes"].clone();
-        for ep in e.as_array_mut().unwrap() {
-            ep.as_object_mut().unwrap().remove("q0");
-        }
-        e
-    };
+    let episodes = |report: serde_json::Value| common::episodes_without_q0(&report);
     let plain = episodes(eval(&["--undisturbed"], "u.json"));
     assert!(
         episodes(recorded) == plain,

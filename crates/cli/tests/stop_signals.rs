@@ -8,10 +8,8 @@
 mod common;
 
 use common::{ok, rows, tensors};
-use std::io::Read;
 use std::path::Path;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 fn row_count(dir: &Path) -> usize {
     std::fs::read_to_string(dir.join("metrics.jsonl"))
@@ -22,30 +20,10 @@ fn row_count(dir: &Path) -> usize {
 /// Starts `esrl ARGS`, sends `signal` once `watched` has 3 rows, and returns the exit status
 /// and stderr.
 fn stop_after_three_rows(args: &[String], watched: &Path, signal: &str) -> (Option<i32>, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(args)
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let started = Instant::now();
-    while row_count(watched) < 3 {
-        assert!(started.elapsed() < Duration::from_secs(120), "no rows");
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let sent = Command::new("kill")
-        .args([signal, &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(sent.success());
-    let exit = child.wait().unwrap();
-    let mut stderr = String::new();
-    child
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut stderr)
-        .unwrap();
-    (exit.code(), stderr)
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let child = common::spawn(&args, true);
+    common::wait_until(120, "no rows", || row_count(watched) >= 3);
+    common::stop(child, signal)
 }
 
 fn stop_and_resume(signal: &str, status: i32) {
@@ -191,33 +169,20 @@ fn a_stopped_evaluation_reports_the_episodes_it_finished() {
     let run = tmp.path().join("run");
     common::smoke("es-sac", &run, &["--generations", "1"]);
     let out = tmp.path().join("eval.json");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args([
+    let child = common::spawn(
+        &[
             "eval",
             run.to_str().unwrap(),
             "--episodes",
             "100000",
             "--out",
             out.to_str().unwrap(),
-        ])
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
+        ],
+        true,
+    );
     std::thread::sleep(Duration::from_millis(1500));
-    let sent = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(sent.success());
-    let exit = child.wait().unwrap();
-    let mut stderr = String::new();
-    child
-        .stderr
-        .take()
-        .unwrap()
-        .read_to_string(&mut stderr)
-        .unwrap();
-    assert_eq!(exit.code(), Some(130), "{stderr}");
+    let (exit, stderr) = common::stop(child, "-INT");
+    assert_eq!(exit, Some(130), "{stderr}");
     let report = common::read_json(&out);
     let done = report["episodes"].as_array().unwrap().len();
     assert!(done > 0 && done < 100_000, "{done} episodes");

@@ -8,8 +8,7 @@ mod common;
 
 use common::{fails, ok, read_json};
 use std::path::Path;
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Child;
 
 const STUDY: &str = r#"
 description = "smoke study"
@@ -27,6 +26,23 @@ agent = "sac"
 preset = "smoke"
 episodes = 6
 "#;
+
+/// `esrl study run STUDY --out OUT --jobs 1` started in the background.
+fn spawn_study(study: &Path, out: &Path) -> Child {
+    common::spawn(
+        &[
+            "study",
+            "run",
+            study.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--jobs",
+            "1",
+            "--no-progress",
+        ],
+        false,
+    )
+}
 
 fn write_study(dir: &Path) -> String {
     let p = dir.join("smoke.toml");
@@ -113,8 +129,8 @@ fn a_stopped_study_resumes_to_the_records_of_an_uninterrupted_one() {
         "2",
     ]);
     // Stopped once the first run has rows, then run again.
-    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args([
+    let child = common::spawn(
+        &[
             "study",
             "run",
             &study,
@@ -122,22 +138,14 @@ fn a_stopped_study_resumes_to_the_records_of_an_uninterrupted_one() {
             split.to_str().unwrap(),
             "--jobs",
             "2",
-        ])
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let started = Instant::now();
+        ],
+        false,
+    );
     let first = split.join("runs/essac-s0/metrics.jsonl");
-    while std::fs::read_to_string(&first).map_or(0, |t| t.lines().count()) < 2 {
-        assert!(started.elapsed() < Duration::from_secs(60), "no rows");
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    let status = child.wait().unwrap();
-    assert_eq!(status.code(), Some(130));
+    common::wait_until(60, "no rows", || {
+        std::fs::read_to_string(&first).map_or(0, |t| t.lines().count()) >= 2
+    });
+    assert_eq!(common::stop(child, "-INT").0, Some(130));
     ok(&[
         "study",
         "run",
@@ -314,34 +322,30 @@ episodes = 100000
     )
     .unwrap();
     let out = tmp.path().join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(["study", "run", study.to_str().unwrap(), "--out"])
-        .arg(&out)
-        .args(["--jobs", "1", "--no-progress"])
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let started = Instant::now();
+    let mut child = spawn_study(&study, &out);
     let first = out.join("records/short-s0/eval.json");
-    while !first.is_file() {
-        assert!(
-            started.elapsed() < Duration::from_secs(120),
-            "no record of the finished run while the study goes on"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    common::wait_until(
+        120,
+        "no record of the finished run while the study goes on",
+        || first.is_file(),
+    );
     assert_eq!(
         child.try_wait().unwrap(),
         None,
         "the second run still trains"
     );
-    Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert_eq!(child.wait().unwrap().code(), Some(130));
+    // `study status` tells the run in training from a stopped one (by the run's lock).
+    let long = out.join("runs/long-s0/metrics.jsonl");
+    common::wait_until(120, "the second run has no rows", || long.is_file());
+    let status = || common::stdout(&["study", "status", out.to_str().unwrap()]);
+    let during = status();
+    assert!(during.contains("| short-s0 | recorded |"), "{during}");
+    assert!(during.contains("| long-s0 | training now |"), "{during}");
+    assert_eq!(common::stop(child, "-INT").0, Some(130));
     assert!(first.is_file());
     assert!(!out.join("records/long-s0").exists());
+    let after = status();
+    assert!(after.contains("| long-s0 | stopped"), "{after}");
 }
 
 /// A run trained before the study (by `esrl train` into the study's `runs/` folder, or by an
@@ -376,29 +380,16 @@ episodes = 2
         &out.join("runs/short-s0"),
         &["--episodes", "2", "--seed", "0"],
     );
-    let mut child = Command::new(env!("CARGO_BIN_EXE_esrl"))
-        .args(["study", "run", study.to_str().unwrap(), "--out"])
-        .arg(&out)
-        .args(["--jobs", "1", "--no-progress"])
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let started = Instant::now();
+    let mut child = spawn_study(&study, &out);
     let record = out.join("records/short-s0/eval.json");
     let long = out.join("runs/long-s0/metrics.jsonl");
-    while !(record.is_file() && long.is_file()) {
-        assert!(
-            started.elapsed() < Duration::from_secs(120),
-            "no record of the run trained before the study while the study trains"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    }
+    common::wait_until(
+        120,
+        "no record of the run trained before the study while the study trains",
+        || record.is_file() && long.is_file(),
+    );
     assert_eq!(child.try_wait().unwrap(), None, "the long run still trains");
-    Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert_eq!(child.wait().unwrap().code(), Some(130));
+    assert_eq!(common::stop(child, "-INT").0, Some(130));
     assert!(record.is_file());
     assert!(!out.join("records/long-s0").exists());
 }

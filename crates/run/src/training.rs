@@ -184,6 +184,20 @@ pub fn lock_run(root: &Path) -> Result<std::fs::File> {
     }
 }
 
+/// Whether a process trains the run in `root` now: whether another open file holds its lock
+/// ([`lock_run`]). Asking takes the lock for an instant (shared, so a second asker does not
+/// see a training) and releases it; a folder without a lock file was never trained.
+pub fn is_training(root: &Path) -> bool {
+    let Ok(file) = std::fs::File::open(root.join(LOCK_FILE)) else {
+        return false;
+    };
+    match file.try_lock_shared() {
+        Ok(()) => false,
+        Err(std::fs::TryLockError::WouldBlock) => true,
+        Err(std::fs::TryLockError::Error(_)) => false,
+    }
+}
+
 /// The file of a run's walking checks, one [`CheckRecord`] per line.
 pub const CHECKS_FILE: &str = "checks.jsonl";
 

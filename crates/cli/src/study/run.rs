@@ -255,7 +255,8 @@ fn copy_present(from: &Path, to: &Path, names: &[&str]) -> Result<()> {
     Ok(())
 }
 
-/// Prints each run's state: recorded, trained, stopped, not started.
+/// Prints each run's state: recorded, training now (another process holds its lock), trained,
+/// stopped, not started.
 pub(super) fn status(dir: &Path) -> Result<()> {
     let study = held_study(dir)?;
     let mut counts = BTreeMap::<&str, usize>::new();
@@ -267,6 +268,8 @@ pub(super) fn status(dir: &Path) -> Result<()> {
         let summary = Summary::read(&run).ok().flatten();
         let state = if record.join(esrl_eval::EVAL_FILE).is_file() {
             "recorded"
+        } else if esrl_run::training::is_training(&run) {
+            "training now"
         } else {
             match run_state(&run)? {
                 RunState::Finished => "trained",

@@ -3,8 +3,10 @@
 
 use serde_json::Value;
 use std::collections::BTreeMap;
+use std::io::Read;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 /// Runs `esrl args…` to completion.
 pub fn esrl(args: &[&str]) -> Output {
@@ -105,4 +107,57 @@ pub fn tensors(path: &Path) -> BTreeMap<String, Vec<u32>> {
         .into_iter()
         .map(|(k, t)| (k, t.data.iter().map(|x| x.to_bits()).collect()))
         .collect()
+}
+
+/// Starts `esrl args…` in the background; its stderr piped (read by [`stop`]) when `stderr`,
+/// else dropped (a long run's progress would fill an unread pipe).
+pub fn spawn(args: &[&str], stderr: bool) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_esrl"))
+        .args(args)
+        .stderr(if stderr {
+            Stdio::piped()
+        } else {
+            Stdio::null()
+        })
+        .spawn()
+        .expect("start esrl")
+}
+
+/// Polls `done` every 10 ms until it holds; fails the test with `what` after `limit_s`
+/// seconds.
+pub fn wait_until(limit_s: u64, what: &str, mut done: impl FnMut() -> bool) {
+    let started = Instant::now();
+    while !done() {
+        assert!(
+            started.elapsed() < Duration::from_secs(limit_s),
+            "{what} (after {limit_s} s)"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+/// Sends `signal` (`"-INT"`, `"-TERM"`) to `child` and waits for it; returns its exit code
+/// and its stderr (empty unless [`spawn`] piped it).
+pub fn stop(mut child: Child, signal: &str) -> (Option<i32>, String) {
+    let sent = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success(), "kill {signal}");
+    let code = child.wait().unwrap().code();
+    let mut stderr = String::new();
+    if let Some(mut pipe) = child.stderr.take() {
+        pipe.read_to_string(&mut stderr).unwrap();
+    }
+    (code, stderr)
+}
+
+/// The `episodes` of an evaluation report without their `q0` (a policy folder holds the actor
+/// alone, so its evaluations have none), to compare with a run's own.
+pub fn episodes_without_q0(report: &Value) -> Value {
+    let mut episodes = report["episodes"].clone();
+    for e in episodes.as_array_mut().unwrap() {
+        e.as_object_mut().unwrap().remove("q0");
+    }
+    episodes
 }
