@@ -108,6 +108,13 @@ pub trait Learner: Resumable + Send {
         Ok(None)
     }
 
+    /// The agent whose policy is the centre of the learner's search distribution (the hybrid
+    /// loop's ES mean θ, with which its perturbations of the next generation are drawn);
+    /// `None` for a learner without one.
+    fn mean_agent(&self) -> Result<Option<Agent>, AgentError> {
+        Ok(None)
+    }
+
     /// Run-level figures for `summary.json` beyond the curve's, by name.
     fn summary_figures(&self) -> Vec<(&'static str, Option<f64>)> {
         Vec::new()

@@ -164,8 +164,13 @@ pub fn which_policy(loaded: &LoadedRun) -> String {
             } else {
                 "the kept policy"
             };
+            let mean = if b.mean {
+                " (the ES mean θ after it)"
+            } else {
+                ""
+            };
             format!(
-                "{dir}: {what} of {unit} {} ({} env steps), {how}{other}",
+                "{dir}: {what} of {unit} {}{mean} ({} env steps), {how}{other}",
                 b.generation, b.env_steps
             )
         }

@@ -293,9 +293,10 @@ fn closing(cfg: &TrainConfig, root: &Path, training: &Session) -> String {
     match (training.kept_check(), best.is_dir()) {
         (Some(k), _) => {
             out += &format!(
-                "  kept:   {dir}/best/ ({} {}, {} env steps): {}\n",
+                "  kept:   {dir}/best/ ({} {}{}, {} env steps): {}\n",
                 training.unit(),
                 k.row,
+                if k.mean { ", the ES mean θ after it" } else { "" },
                 k.env_steps,
                 k.result.describe()
             );

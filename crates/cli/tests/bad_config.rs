@@ -41,6 +41,7 @@ fn bad_values_name_their_field() {
         ("bogus_key = 3\n", "sac", "bogus_key"),
         ("[rl]\nbatch_size = \"many\"\n", "sac", "batch_size"),
         ("this is not toml", "sac", "TOML"),
+        ("[check]\nmean = true\n", "sac", "check.mean"),
     ];
     for (toml, agent, field) in cases {
         let (ok, stderr, wrote) = train_with(toml, agent);

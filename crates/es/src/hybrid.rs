@@ -644,6 +644,14 @@ impl Learner for Hybrid {
         Ok(Some(agent))
     }
 
+    /// The agent with the actor (and, for ES-SAC, log α) of the ES mean θ after the last
+    /// generation's eqs. 10–11.
+    fn mean_agent(&self) -> Result<Option<Agent>, AgentError> {
+        let mut agent = self.trainer.agent().clone();
+        agent.set_genome(&self.strategy.mean)?;
+        Ok(Some(agent))
+    }
+
     fn summary_figures(&self) -> Vec<(&'static str, Option<f64>)> {
         vec![
             ("rl_trained_best_share", self.stats.trained_best_share()),

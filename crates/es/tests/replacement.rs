@@ -48,3 +48,23 @@ fn rl_actor_is_in_every_population_and_replaced_only_when_beaten() {
         );
     }
 }
+
+/// Contract: the hybrid loop's mean agent (`Learner::mean_agent`, checked with `check.mean`)
+/// is the RL agent with the ES mean θ as its genome: the actor (and ES-SAC's log α) of θ,
+/// which moves with each generation's eqs. 10–11.
+#[test]
+fn the_mean_agent_carries_the_es_mean() {
+    use esrl_agents::Learner;
+    for algo in [Algo::Sac, Algo::Td3] {
+        let mut h = hybrid(algo, EsConfig::default(), 3);
+        let mut means = Vec::new();
+        for _ in 0..3 {
+            h.step().unwrap();
+            let agent = h.mean_agent().unwrap().expect("a hybrid has an ES mean");
+            assert_eq!(agent.genome(), h.strategy().mean, "{algo:?}");
+            assert_eq!(agent.genome_len(), h.trainer().agent().genome_len());
+            means.push(agent.genome());
+        }
+        assert!(means[0] != means[2], "{algo:?}: the mean moved");
+    }
+}

@@ -70,6 +70,21 @@
 //! reach. While `[restart]` may still start the run over, checks run in full (the rule reads
 //! their mean distance); [`Checker::check`]'s `may_stop` says when it no longer can.
 //!
+//! **Checking the ES mean** ([`CheckConfig::mean`], off by default). The hybrid loop's
+//! candidates are individuals: the generation's best perturbation θ + σε (or the RL actor),
+//! chosen by one sampled rollout each. With `mean`, each policy due a check is checked
+//! beside the ES mean θ after the same generation (the elites' weighted mean, eq. 10), first,
+//! with the same starts, and both are ranked as candidates of their own: the mean is kept,
+//! is the first walk, or stops the run wherever it ranks as a row's policy would, and a
+//! row's policy that only ties with it does not replace it. The learner is the same run
+//! either way, so the first walk can only come at the same row or earlier; each due check
+//! costs up to twice the time. `checks.jsonl` marks the mean's checks (`"mean": true`) and
+//! `best.json` a kept mean. (The motive, measured on eleven `walker-fast` runs, three as the
+//! preset is and eight trained from wider starts: each run's ES mean at its stop, evaluated
+//! from 200 unseen starts beside the individual it kept a generation or two before, fell
+//! from 17 of 2,200 starts against the individuals' 32 and walked with less knee-torque
+//! asymmetry in ten of the eleven; `results/unseen-starts/README.md`, "The ES mean".)
+//!
 //! **Cost.** A check simulates up to `starts` whole episodes (24,000 steps for 10 walking
 //! starts of 60 s). It runs beside the next row on the run's thread pool (the training
 //! session joins the two), so on two threads it mostly takes the core the rollouts leave
@@ -126,6 +141,10 @@ pub struct CheckConfig {
     /// Default false: every start runs.
     #[serde(skip_serializing_if = "is_false")]
     pub stop_early: bool,
+    /// Check the hybrid loop's ES mean θ beside each policy due a check, as a candidate of
+    /// its own (module docs, "Checking the ES mean"). Default false.
+    #[serde(skip_serializing_if = "is_false")]
+    pub mean: bool,
 }
 
 impl Default for CheckConfig {
@@ -139,6 +158,7 @@ impl Default for CheckConfig {
             confirm_starts: 0,
             max_track_time: None,
             stop_early: false,
+            mean: false,
         }
     }
 }
@@ -818,6 +838,10 @@ pub struct CheckRecord {
     pub result: CheckResult,
     /// Whether `RUN/best/` took this policy (it ranked above every policy checked before).
     pub kept: bool,
+    /// Whether the checked policy is the ES mean θ after the row ([`CheckConfig::mean`]), not
+    /// the row's own policy. Absent from `checks.jsonl` when false.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub mean: bool,
     /// Seconds the check took.
     pub seconds: f64,
 }

@@ -312,6 +312,10 @@ pub struct BestInfo {
     pub fitness: f64,
     /// Environment steps taken by the end of that generation.
     pub env_steps: u64,
+    /// Whether the policy is the ES mean θ after that generation (`check.mean`), not its best
+    /// individual. Absent when false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub mean: bool,
     /// What the walking check found for it, when the run chooses `best/` by the check
     /// (`[check]`; then `fitness` is its row's curve value, not necessarily the highest).
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -600,6 +600,13 @@ impl TrainConfig {
         }
         if let Some(check) = &self.check {
             check.validate()?;
+            if check.mean && !self.agent.is_hybrid() {
+                bail!(
+                    "check.mean = true needs a hybrid agent (es-sac, es-td3, es-ddpg): {} has \
+                     no ES mean to check",
+                    self.agent.name()
+                );
+            }
         }
         if self.rl.mirror && self.env != EnvKind::Walk {
             bail!(

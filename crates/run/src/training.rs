@@ -48,9 +48,9 @@ pub struct RowDone {
     pub best: f64,
     /// Its one-line description.
     pub summary: String,
-    /// A walking check that finished while this row ran: of the policy of the row before,
-    /// when that one was due a check.
-    pub check: Option<CheckRecord>,
+    /// The walking checks that finished while this row ran: of the policy of the row before,
+    /// when that one was due a check (and of the ES mean after it, with `check.mean`).
+    pub checks: Vec<CheckRecord>,
     /// The attempt abandoned before this row, when `[restart]` started the run over
     /// ([`crate::Session::step`]; a [`Training`] alone leaves it `None`).
     pub restarted: Option<Restart>,
@@ -117,9 +117,11 @@ impl Attempt {
     }
 }
 
-/// A policy due a walking check, and the row it comes from.
+/// The policies due a walking check, and the row they come from.
 struct Due {
-    agent: esrl_agents::Agent,
+    /// Checked in order: with `check.mean` the ES mean θ after the row, then the row's own
+    /// policy ([`crate::check`] module docs, "Checking the ES mean").
+    candidates: Vec<Candidate>,
     row: usize,
     env_steps: u64,
     curve: f64,
@@ -136,23 +138,42 @@ struct Due {
     seeking: bool,
 }
 
+/// One policy of a [`Due`].
+struct Candidate {
+    agent: esrl_agents::Agent,
+    /// Whether it is the ES mean θ ([`crate::check::CheckConfig::mean`]).
+    mean: bool,
+}
+
 /// A check done.
 struct Checked {
-    due: Due,
+    candidate: Candidate,
     result: crate::check::CheckResult,
     seconds: f64,
 }
 
-/// Runs the check of `due` (on the calling rayon pool).
-fn run_check(checker: Option<&Checker>, due: Due) -> Result<Checked> {
+/// Runs the checks of `due`'s candidates in order (on the calling rayon pool), each told the
+/// kept policy as the ones before it leave it; returns `due` without its candidates and the
+/// checks.
+fn run_checks(checker: Option<&Checker>, mut due: Due) -> Result<(Due, Vec<Checked>)> {
     let checker = checker.ok_or_else(|| Error::Msg("a check is due without a checker".into()))?;
-    let t = Instant::now();
-    let result = checker.check_seeking(&due.agent, due.may_stop, due.kept.as_ref(), due.seeking)?;
-    Ok(Checked {
-        due,
-        result,
-        seconds: t.elapsed().as_secs_f64(),
-    })
+    let (mut kept, mut seeking) = (due.kept.clone(), due.seeking);
+    let mut done = Vec::new();
+    for candidate in std::mem::take(&mut due.candidates) {
+        let t = Instant::now();
+        let result =
+            checker.check_seeking(&candidate.agent, due.may_stop, kept.as_ref(), seeking)?;
+        if kept.as_ref().is_none_or(|k| result.beats(k)) {
+            kept = Some(result.clone());
+        }
+        seeking &= !(result.walking.unwrap_or(false) || result.at_bar);
+        done.push(Checked {
+            candidate,
+            result,
+            seconds: t.elapsed().as_secs_f64(),
+        });
+    }
+    Ok((due, done))
 }
 
 /// The lock file of a run folder ([`lock_run`]).
@@ -462,12 +483,12 @@ impl<L: Learner> Training<L> {
         let (row, checked) = self.pool.install(|| {
             rayon::join(
                 || learner.run_row(envs),
-                || due.map(|d| run_check(checker.as_ref(), d)),
+                || due.map(|d| run_checks(checker.as_ref(), d)),
             )
         });
-        let check = match checked {
-            Some(c) => Some(self.record_check(c?)?),
-            None => None,
+        let checks = match checked {
+            Some(c) => self.record_checks(c?)?,
+            None => Vec::new(),
         };
         let row = match row {
             Ok(row) if !row.curve().is_finite() => Err(AgentError::NonFinite {
@@ -500,6 +521,7 @@ impl<L: Learner> Training<L> {
                             generation: self.learner.rows() - 1,
                             fitness: curve,
                             env_steps: self.learner.env_steps(),
+                            mean: false,
                             check: None,
                         };
                         checkpoint::save_best(&self.root, &self.cfg, &agent, &info)?;
@@ -526,7 +548,7 @@ impl<L: Learner> Training<L> {
             curve,
             best: previous_best.max(curve),
             summary: row.summary(),
-            check,
+            checks,
             estimate: None,
             restarted: None,
         })
@@ -558,8 +580,15 @@ impl<L: Learner> Training<L> {
             Some(agent) => agent,
             None => self.learner.agent().clone(),
         };
+        let mut candidates = Vec::new();
+        if cfg.mean {
+            if let Some(agent) = self.learner.mean_agent()? {
+                candidates.push(Candidate { agent, mean: true });
+            }
+        }
+        candidates.push(Candidate { agent, mean: false });
         Ok(Some(Due {
-            agent,
+            candidates,
             row: self.learner.rows() - 1,
             env_steps: steps,
             curve,
@@ -589,11 +618,19 @@ impl<L: Learner> Training<L> {
             || self.best_distance().is_some_and(|d| d >= rule.min_distance)
     }
 
+    /// Logs the finished checks of `due` in order ([`Training::record_check`]).
+    fn record_checks(&mut self, (due, checks): (Due, Vec<Checked>)) -> Result<Vec<CheckRecord>> {
+        checks
+            .into_iter()
+            .map(|c| self.record_check(&due, c))
+            .collect()
+    }
+
     /// Logs a finished check to `checks.jsonl` and keeps its policy in `RUN/best/` if it
     /// ranks above the policy there.
-    fn record_check(&mut self, checked: Checked) -> Result<CheckRecord> {
+    fn record_check(&mut self, due: &Due, checked: Checked) -> Result<CheckRecord> {
         let Checked {
-            due,
+            candidate,
             result,
             seconds,
         } = checked;
@@ -611,16 +648,18 @@ impl<L: Learner> Training<L> {
             trigger: due.trigger,
             result,
             kept,
+            mean: candidate.mean,
             seconds,
         };
         let info = || BestInfo {
             generation: record.row,
             fitness: due.curve,
             env_steps: due.env_steps,
+            mean: candidate.mean,
             check: Some(record.result.clone()),
         };
         if kept {
-            checkpoint::save_best(&self.root, &self.cfg, &due.agent, &info())?;
+            checkpoint::save_best(&self.root, &self.cfg, &candidate.agent, &info())?;
             state.kept = Some(record.clone());
         }
         if record.result.at_bar && state.first_walk.is_none() {
@@ -628,7 +667,7 @@ impl<L: Learner> Training<L> {
         }
         let walking = record.result.walking.unwrap_or(false) || record.result.at_bar;
         if due.seeking && walking && state.first_any_walk.is_none() {
-            checkpoint::save_policy(&self.root, FIRST_WALK, &self.cfg, &due.agent, &info())?;
+            checkpoint::save_policy(&self.root, FIRST_WALK, &self.cfg, &candidate.agent, &info())?;
             state.first_any_walk = Some(record.clone());
         }
         append_jsonl(&self.root.join(CHECKS_FILE), &record)?;
@@ -653,13 +692,13 @@ impl<L: Learner> Training<L> {
     }
 
     /// Runs the check still due, if any, now: a checkpoint covers every check of its rows.
-    fn flush_check(&mut self) -> Result<Option<CheckRecord>> {
+    fn flush_check(&mut self) -> Result<Vec<CheckRecord>> {
         let Some(due) = self.due.take() else {
-            return Ok(None);
+            return Ok(Vec::new());
         };
         let checker = &self.checker;
-        let checked = self.pool.install(|| run_check(checker.as_ref(), due))?;
-        self.record_check(checked).map(Some)
+        let checked = self.pool.install(|| run_checks(checker.as_ref(), due))?;
+        self.record_checks(checked)
     }
 
     fn checkpoint(&mut self) -> Result<()> {

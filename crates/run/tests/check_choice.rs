@@ -8,7 +8,7 @@ use esrl_agents::{
     Agent, AgentError, EpisodeReport, Learner, ReplayBuffer, Resumable, Trainer, TrainerState,
 };
 use esrl_run::check::{CheckConfig, CheckRecord};
-use esrl_run::checkpoint::{BestInfo, BEST, BEST_INFO};
+use esrl_run::checkpoint::{self, BestInfo, BEST, BEST_INFO};
 use esrl_run::restart::RestartConfig;
 use esrl_run::training::CHECKS_FILE;
 use esrl_run::{build, AgentKind, EnvKind, Preset, TrainConfig, Training};
@@ -16,10 +16,12 @@ use esrl_sim::MakeEnv;
 use std::collections::HashMap;
 
 /// A learner whose rows are given: each row's curve value and the actor genome that scored
-/// it. Everything a checkpoint needs comes from an inner trainer.
+/// it, and the genome of its search distribution's mean, if any. Everything a checkpoint
+/// needs comes from an inner trainer.
 struct Scripted {
     inner: Trainer,
     rows: Vec<(f64, Vec<f32>)>,
+    mean: Option<Vec<f32>>,
     done: usize,
 }
 
@@ -60,6 +62,15 @@ impl Learner for Scripted {
     fn scored_agent(&self) -> Result<Option<Agent>, AgentError> {
         let mut agent = self.inner.agent().clone();
         agent.set_genome(&self.rows[self.done - 1].1)?;
+        Ok(Some(agent))
+    }
+
+    fn mean_agent(&self) -> Result<Option<Agent>, AgentError> {
+        let Some(mean) = &self.mean else {
+            return Ok(None);
+        };
+        let mut agent = self.inner.agent().clone();
+        agent.set_genome(mean)?;
         Ok(Some(agent))
     }
 }
@@ -122,20 +133,38 @@ fn train_with(cfg: TrainConfig) -> (BestInfo, Vec<CheckRecord>) {
 /// [`train_with`], the policy that falls first when `falls_first` (it then scores the lower
 /// curve value, so both rows still set a new best).
 fn train_rows(cfg: TrainConfig, falls_first: bool) -> (BestInfo, Vec<CheckRecord>) {
+    let (stands, falls) = genomes(&cfg);
+    let rows = if falls_first {
+        vec![(1.0, falls), (5.0, stands)]
+    } else {
+        vec![(1.0, stands), (5.0, falls)]
+    };
+    let (best, records, _) = train_scripted(cfg, rows, None);
+    (best, records)
+}
+
+/// A genome that stands and one that falls: a zero actor holds the standing pose (action 0
+/// is the standing target); an actor of all 0.05 drives every joint towards its upper limit
+/// and falls.
+fn genomes(cfg: &TrainConfig) -> (Vec<f32>, Vec<f32>) {
+    let envs = build::envs(cfg.env, &cfg.walk).unwrap();
+    let n = build::agent(cfg, &envs).unwrap().genome_len();
+    (vec![0.0f32; n], vec![0.05f32; n])
+}
+
+/// Trains the scripted `rows` (with the search mean `mean`) into a fresh folder; returns
+/// `best.json`, the check log and the genome `RUN/best/` holds.
+fn train_scripted(
+    cfg: TrainConfig,
+    rows: Vec<(f64, Vec<f32>)>,
+    mean: Option<Vec<f32>>,
+) -> (BestInfo, Vec<CheckRecord>, Vec<f32>) {
     let envs = build::envs(cfg.env, &cfg.walk).unwrap();
     let agent = build::agent(&cfg, &envs).unwrap();
-    let n = agent.genome_len();
-    // A zero actor holds the standing pose (action 0 is the standing target); an actor of
-    // all 0.05 drives every joint towards its upper limit and falls.
-    let stands = vec![0.0f32; n];
-    let falls = vec![0.05f32; n];
     let learner = Scripted {
         inner: Trainer::new(agent, cfg.seed),
-        rows: if falls_first {
-            vec![(1.0, falls), (5.0, stands)]
-        } else {
-            vec![(1.0, stands), (5.0, falls)]
-        },
+        rows,
+        mean,
         done: 0,
     };
     let dir = tempfile::tempdir().unwrap();
@@ -154,7 +183,9 @@ fn train_rows(cfg: TrainConfig, falls_first: bool) -> (BestInfo, Vec<CheckRecord
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())
         .collect();
-    (best, records)
+    let mut kept = build::agent(&cfg, &envs).unwrap();
+    checkpoint::load_agent(&root.join(BEST), &mut kept).unwrap();
+    (best, records, kept.genome())
 }
 
 #[test]
@@ -241,4 +272,61 @@ fn a_stopped_check_that_ranks_above_the_kept_policy_runs_in_full() {
     assert!(records[0].kept && records[1].kept);
     assert_eq!(best.generation, 1);
     assert_eq!(best.check.as_ref(), Some(&records[1].result));
+}
+
+/// Contract (`check.mean`): each policy due a check is checked after the ES mean, with the
+/// same starts, and both are ranked as candidates. Here the mean stands and the second row's
+/// individual falls: the mean is kept over it; the first row's individual, which stands as
+/// the mean does, only ties and does not replace the mean checked before it.
+#[test]
+fn the_es_mean_is_checked_first_and_kept_over_individuals_that_do_not_beat_it() {
+    let mut cfg = config(true);
+    cfg.check.as_mut().unwrap().mean = true;
+    let (stands, falls) = genomes(&cfg);
+    let rows = vec![(1.0, stands.clone()), (5.0, falls.clone())];
+    let (best, records, kept) = train_scripted(cfg, rows.clone(), Some(stands.clone()));
+    let what: Vec<(usize, bool, bool)> = records.iter().map(|r| (r.row, r.mean, r.kept)).collect();
+    assert_eq!(
+        what,
+        [
+            (0, true, true),
+            (0, false, false),
+            (1, true, false),
+            (1, false, false)
+        ],
+        "(row, mean, kept) of each check"
+    );
+    assert_eq!(
+        records[0].result, records[1].result,
+        "the same policy from the same starts"
+    );
+    assert!(records[3].result.falls > records[2].result.falls);
+    assert!(best.mean && best.generation == 0);
+    assert_eq!(best.check.as_ref(), Some(&records[0].result));
+    assert_eq!(kept, stands, "RUN/best/ holds the mean's genome");
+
+    // A mean that falls is checked and ranked the same way, and loses to the individual.
+    let (best, records, kept) = train_scripted(config(true), rows.clone(), Some(falls.clone()));
+    assert_eq!(
+        records.len(),
+        2,
+        "without check.mean the mean is not checked"
+    );
+    assert!(records.iter().all(|r| !r.mean) && !best.mean);
+    assert_eq!(kept, stands);
+    let mut cfg = config(true);
+    cfg.check.as_mut().unwrap().mean = true;
+    let (best, records, kept) = train_scripted(cfg, rows, Some(falls));
+    let what: Vec<(usize, bool, bool)> = records.iter().map(|r| (r.row, r.mean, r.kept)).collect();
+    assert_eq!(
+        what,
+        [
+            (0, true, true),
+            (0, false, true),
+            (1, true, false),
+            (1, false, false)
+        ]
+    );
+    assert!(!best.mean && best.generation == 0);
+    assert_eq!(kept, stands);
 }
