@@ -283,12 +283,21 @@ def test_study_and_robustness_figures(tmp_path) -> None:
     np.testing.assert_array_equal(s["finished"], [0, 0, 4])
     np.testing.assert_array_equal(s["at_bar"], [False, False, True])
     np.testing.assert_array_equal(s["stopped"], [False, True, False])
+    np.testing.assert_array_equal(s["mean"], [False, False, False])
     assert list(s["classes"]) == ["walk", "shuffle", "fall"]
     np.testing.assert_array_equal(s["classes"]["shuffle"], [0, 0, 1])
     np.testing.assert_array_equal(s["classes"]["fall"], [3, 0, 0])
     files = study_figures(study, tmp_path / "out", dpi=40)
     assert [f.name for f in files] == ["study_intervals.png", "study_profiles.png",
                                        "study_checks.png"]
+    # A run with check.mean: the ES mean's check beside each generation's, marked.
+    with (run / "checks.jsonl").open("a") as f:
+        f.write(json.dumps({**check, "env_steps": 7000, "finished": 2, "mean": True,
+                            "classes": {"walk": 4}}) + "\n")
+    s = check_series(run / "checks.jsonl")
+    np.testing.assert_array_equal(s["mean"], [False, False, False, True])
+    np.testing.assert_array_equal(s["classes"]["walk"], [1, 1, 3, 4])
+    assert checks_figure(study, tmp_path / "mean", dpi=40).is_file()
     card = tmp_path / "eval.json"
     row = {"episodes": 4, "survived": 2, "finished": 1, "speed": 1.0, "classes": {}}
     (card).write_text(json.dumps({"run": "r", "robustness": [

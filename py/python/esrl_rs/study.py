@@ -11,7 +11,8 @@
   walking checks found during training, one panel per run: the episodes of each gait class
   stacked, the starts past the 50 m line, and the first check at the walking bar
   (``study_checks.png``): whether a seed's policy walked before it learnt to finish, and
-  what it turned into.
+  what it turned into. With ``check.mean``, the ES mean's checks are a dashed line of their
+  own (the starts it finished), beside the stacked classes of the generations' policies.
 - :func:`robustness_figure`: from an ``eval.json`` with a ``robustness`` card (``esrl eval
   POLICY --robustness``), the share of episodes that stayed up against each disturbance's
   magnitude (``robustness.png``).
@@ -48,9 +49,9 @@ CLASS_COLORS = {"walk": "tab:green", "shuffle": "tab:olive", "run": "tab:blue", 
 def check_series(checks_jsonl: PathLike) -> Dict[str, Any]:
     """The checks of one run as arrays over training: ``env_steps``, ``starts``, ``finished``,
     ``at_bar`` (bool), ``stopped`` (bool: the check stopped once the bar was out of reach,
-    ``check.stop_early``, so its counts are over the starts it ran) and ``classes`` (class →
-    episodes per check, every class of any check, zero where a check had none), in the order
-    of the file."""
+    ``check.stop_early``, so its counts are over the starts it ran), ``mean`` (bool: a check
+    of the ES mean, ``check.mean``) and ``classes`` (class → episodes per check, every class
+    of any check, zero where a check had none), in the order of the file."""
     rows = [json.loads(line) for line in Path(checks_jsonl).read_text(encoding="utf-8").splitlines()
             if line.strip()]
     names = sorted({c for r in rows for c in r["classes"]},
@@ -61,6 +62,7 @@ def check_series(checks_jsonl: PathLike) -> Dict[str, Any]:
         "finished": np.array([r["finished"] for r in rows], dtype=float),
         "at_bar": np.array([bool(r["at_bar"]) for r in rows]),
         "stopped": np.array([bool(r.get("stopped", False)) for r in rows]),
+        "mean": np.array([bool(r.get("mean", False)) for r in rows]),
         "classes": {c: np.array([r["classes"].get(c, 0) for r in rows], dtype=float) for c in names},
     }
 
@@ -82,8 +84,14 @@ def checks_figure(study_dir: PathLike, out: PathLike, dpi: int = 150) -> Path:
     for ax, run in zip(axes.flat, runs):
         s = check_series(run / "checks.jsonl")
         # Shares of each check's starts: a confirmed check (check.confirm_starts) has more. A
-        # stopped check's shares are of the few starts it ran: it is marked, not stacked.
-        full = ~s["stopped"]
+        # stopped check's shares are of the few starts it ran: it is marked, not stacked. The
+        # ES mean's checks (check.mean) are a line of their own.
+        full = ~s["stopped"] & ~s["mean"]
+        mean = ~s["stopped"] & s["mean"]
+        if mean.any():
+            ax.step(s["env_steps"][mean] / 1e6,
+                    s["finished"][mean] / np.maximum(s["starts"][mean], 1.0), where="post",
+                    color="tab:orange", ls="--", lw=1.0, label="past 50 m, ES mean")
         x = s["env_steps"][full] / 1e6
         n = np.maximum(s["starts"][full], 1.0)
         ax.stackplot(x, *(v[full] / n for v in s["classes"].values()), step="post",
