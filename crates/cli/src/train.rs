@@ -296,7 +296,11 @@ fn closing(cfg: &TrainConfig, root: &Path, training: &Session) -> String {
                 "  kept:   {dir}/best/ ({} {}{}, {} env steps): {}\n",
                 training.unit(),
                 k.row,
-                if k.mean { ", the ES mean θ after it" } else { "" },
+                if k.mean {
+                    ", the ES mean θ after it"
+                } else {
+                    ""
+                },
                 k.env_steps,
                 k.result.describe()
             );
