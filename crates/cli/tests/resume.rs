@@ -55,3 +55,65 @@ fn an_existing_run_is_not_overwritten() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("--resume"));
     assert_eq!(std::fs::read(dir.join("metrics.jsonl")).unwrap(), before);
 }
+
+/// The checks (`check.mean`: the ES mean's too) without their timings, in file order.
+fn checks(dir: &std::path::Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(dir.join("checks.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+            let m = v.as_object_mut().unwrap();
+            m.remove("wall_s");
+            m.remove("seconds");
+            v
+        })
+        .collect()
+}
+
+/// With walking checks of the ES mean (`check.mean`), a run stopped and resumed checks and
+/// keeps the same policies as one run straight, and so does one at another thread count: the
+/// same check log and `best/`.
+#[test]
+fn es_sac_with_checks_of_the_es_mean_resumes_exactly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let cfg = tmp.path().join("mean.toml");
+    std::fs::write(
+        &cfg,
+        "[check]\nstarts = 2\nevery_steps = 200\nmean = true\n",
+    )
+    .unwrap();
+    let (straight, split) = (tmp.path().join("straight"), tmp.path().join("split"));
+    let c = cfg.to_str().unwrap();
+    let two = tmp.path().join("two-threads");
+    for (dir, budget, threads) in [(&straight, "6", "1"), (&split, "3", "1"), (&two, "6", "2")] {
+        let flags = ["--seed", "2", "--generations", budget, "--config", c];
+        smoke(
+            "es-sac",
+            dir,
+            &[&flags[..], &["--threads", threads]].concat(),
+        );
+    }
+    ok(&[
+        "train",
+        "es-sac",
+        "--resume",
+        split.to_str().unwrap(),
+        "--generations",
+        "6",
+    ]);
+    assert_eq!(rows(&straight), rows(&split));
+    let log = checks(&straight);
+    assert_eq!(log, checks(&split), "resumed checks differ");
+    assert_eq!(log, checks(&two), "checks differ at 2 threads");
+    assert!(
+        log.iter().any(|c| c["mean"] == true) && log.iter().any(|c| c.get("mean").is_none()),
+        "both kinds of check ran: {log:?}"
+    );
+    let best = |d: &std::path::Path| common::read_json(&d.join("best/best.json"));
+    assert_eq!(best(&straight), best(&split));
+    assert_eq!(
+        tensors(&straight.join("best/actor.safetensors")),
+        tensors(&split.join("best/actor.safetensors"))
+    );
+}
