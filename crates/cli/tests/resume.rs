@@ -58,17 +58,7 @@ fn an_existing_run_is_not_overwritten() {
 
 /// The checks (`check.mean`: the ES mean's too) without their timings, in file order.
 fn checks(dir: &std::path::Path) -> Vec<serde_json::Value> {
-    std::fs::read_to_string(dir.join("checks.jsonl"))
-        .unwrap()
-        .lines()
-        .map(|l| {
-            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
-            let m = v.as_object_mut().unwrap();
-            m.remove("wall_s");
-            m.remove("seconds");
-            v
-        })
-        .collect()
+    common::jsonl_without(&dir.join("checks.jsonl"), &["wall_s", "seconds"])
 }
 
 /// With walking checks of the ES mean (`check.mean`), a run stopped and resumed checks and

@@ -274,20 +274,30 @@ fn a_stopped_check_that_ranks_above_the_kept_policy_runs_in_full() {
     assert_eq!(best.check.as_ref(), Some(&records[1].result));
 }
 
+/// The short walking configuration with `check.mean`.
+fn with_mean() -> TrainConfig {
+    let mut cfg = config(true);
+    cfg.check.as_mut().unwrap().mean = true;
+    cfg
+}
+
+/// Each check's (row, mean, kept).
+fn roles(records: &[CheckRecord]) -> Vec<(usize, bool, bool)> {
+    records.iter().map(|r| (r.row, r.mean, r.kept)).collect()
+}
+
 /// Contract (`check.mean`): each policy due a check is checked after the ES mean, with the
 /// same starts, and both are ranked as candidates. Here the mean stands and the second row's
 /// individual falls: the mean is kept over it; the first row's individual, which stands as
 /// the mean does, only ties and does not replace the mean checked before it.
 #[test]
 fn the_es_mean_is_checked_first_and_kept_over_individuals_that_do_not_beat_it() {
-    let mut cfg = config(true);
-    cfg.check.as_mut().unwrap().mean = true;
+    let cfg = with_mean();
     let (stands, falls) = genomes(&cfg);
     let rows = vec![(1.0, stands.clone()), (5.0, falls.clone())];
     let (best, records, kept) = train_scripted(cfg, rows.clone(), Some(stands.clone()));
-    let what: Vec<(usize, bool, bool)> = records.iter().map(|r| (r.row, r.mean, r.kept)).collect();
     assert_eq!(
-        what,
+        roles(&records),
         [
             (0, true, true),
             (0, false, false),
@@ -314,12 +324,10 @@ fn the_es_mean_is_checked_first_and_kept_over_individuals_that_do_not_beat_it() 
     );
     assert!(records.iter().all(|r| !r.mean) && !best.mean);
     assert_eq!(kept, stands);
-    let mut cfg = config(true);
-    cfg.check.as_mut().unwrap().mean = true;
+    let cfg = with_mean();
     let (best, records, kept) = train_scripted(cfg, rows, Some(falls));
-    let what: Vec<(usize, bool, bool)> = records.iter().map(|r| (r.row, r.mean, r.kept)).collect();
     assert_eq!(
-        what,
+        roles(&records),
         [
             (0, true, true),
             (0, false, true),

@@ -80,12 +80,21 @@ pub fn read_json(path: &Path) -> Value {
 
 /// The metric rows of a run without their wall-clock field.
 pub fn rows(dir: &Path) -> Vec<Value> {
-    std::fs::read_to_string(dir.join("metrics.jsonl"))
+    jsonl_without(&dir.join("metrics.jsonl"), &["wall_s"])
+}
+
+/// The lines of a JSON-lines file, each without the fields `drop` (timings that differ
+/// between equal runs).
+pub fn jsonl_without(path: &Path, drop: &[&str]) -> Vec<Value> {
+    std::fs::read_to_string(path)
         .unwrap()
         .lines()
         .map(|l| {
             let mut v: Value = serde_json::from_str(l).unwrap();
-            v.as_object_mut().unwrap().remove("wall_s");
+            let m = v.as_object_mut().unwrap();
+            for key in drop {
+                m.remove(*key);
+            }
             v
         })
         .collect()
