@@ -66,6 +66,9 @@ struct RunRow {
     time_to_walk_s: Option<f64>,
     env_steps: u64,
     wall_s: f64,
+    /// Seconds the run's walking checks took (`check_s` of its summary; of the kept attempt
+    /// where the run started over), part of `wall_s`; none for a run without checks.
+    check_s: Option<f64>,
     best_win_50: f64,
     /// The seed of the attempt that was kept, when `[restart]` started the run over.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -120,6 +123,7 @@ fn run_row(study: &Study, rec: &Record) -> RunRow {
         time_to_walk_s: figure("time_to_walk_s"),
         env_steps: rec.summary.env_steps + restart_steps,
         wall_s: rec.summary.wall_s + restart_wall,
+        check_s: figure("check_s").filter(|_| figure("checks").is_some_and(|c| c > 0.0)),
         best_win_50: rec.summary.curve.best_win_50,
         restarted_as: restarted_as(&rec.summary),
     }
@@ -411,18 +415,18 @@ fn every_run(rows: &[RunRow]) -> (String, String) {
     md.push_str(
         "\n## Every run\n\n| run | at bar | gait classes | finished | falls | track time (s) | \
          speed (m/s) | sway (m) | knee asym. | knee flexion (°) | double support | torso pitch \
-         (°) | steps to walk | env steps | wall (s) |\n|---|---|---|---:|---:|---:|---:|---:|---:\
-         |---:|---:|---:|---:|---:|---:|\n",
+         (°) | steps to walk | env steps | wall (s) | checks (s) |\n|---|---|---|---:|---:|---:|---:\
+         |---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     let mut csv = String::from(
         "arm,seed,at_bar,classes,finished,falls,episodes,track_time,speed,sway,knee_asymmetry,\
          knee_flexion_deg,double_support,torso_pitch_deg,steps_to_walk,time_to_walk_s,env_steps,\
-         wall_s,best_win_50\n",
+         wall_s,best_win_50,check_s\n",
     );
     for r in rows {
         md.push_str(&format!(
             "| {}-s{}{} | {} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.0} \
-             |\n",
+             | {} |\n",
             r.arm,
             r.seed,
             r.restarted_as
@@ -442,10 +446,11 @@ fn every_run(rows: &[RunRow]) -> (String, String) {
             r.steps_to_walk
                 .map_or("–".into(), |s| format!("{:.2} M", s / 1e6)),
             r.env_steps,
-            r.wall_s
+            r.wall_s,
+            fmt(r.check_s, 0)
         ));
         csv.push_str(&format!(
-            "{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
+            "{},{},{},\"{}\",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n",
             r.arm,
             r.seed,
             r.at_bar,
@@ -465,6 +470,7 @@ fn every_run(rows: &[RunRow]) -> (String, String) {
             r.env_steps,
             fmt(Some(r.wall_s), 1),
             fmt(Some(r.best_win_50), 2),
+            fmt(r.check_s, 1),
         ));
     }
     (md, csv)
@@ -575,9 +581,27 @@ mod tests {
             time_to_walk_s: Some(900.0),
             env_steps: 3_000_000,
             wall_s: 1000.0,
+            check_s: Some(120.4),
             best_win_50: 50.0,
             restarted_as: None,
         }
+    }
+
+    #[test]
+    fn every_run_gives_the_checks_seconds_and_a_dash_for_a_run_without_checks() {
+        let unchecked = RunRow {
+            checked: false,
+            check_s: None,
+            ..row(1, 20, 0, 20)
+        };
+        let (md, csv) = every_run(&[row(0, 20, 0, 20), unchecked]);
+        assert!(md.contains("| wall (s) | checks (s) |"), "{md}");
+        assert!(md.contains("| 3000000 | 1000 | 120 |\n"), "{md}");
+        assert!(md.contains("| 3000000 | 1000 | – |\n"), "{md}");
+        let lines: Vec<&str> = csv.lines().collect();
+        assert!(lines[0].ends_with(",best_win_50,check_s"), "{csv}");
+        assert!(lines[1].ends_with(",1000.0,50.00,120.4"), "{csv}");
+        assert!(lines[2].ends_with(",1000.0,50.00,–"), "{csv}");
     }
 
     #[test]
