@@ -98,6 +98,7 @@ fn run_row(study: &Study, rec: &Record) -> RunRow {
     // A run that started over counts its abandoned attempts in its cost.
     let restart_steps = figure("restart_env_steps").unwrap_or(0.0) as u64;
     let restart_wall = figure("restart_wall_s").unwrap_or(0.0);
+    let checked = figure("checks").is_some_and(|c| c > 0.0);
     RunRow {
         arm: study.file.arms[rec.arm].name.clone(),
         seed: rec.seed,
@@ -118,12 +119,12 @@ fn run_row(study: &Study, rec: &Record) -> RunRow {
         torso_pitch_deg: g
             .and_then(|g| g.torso_pitch.as_ref())
             .map(|p| p.mean.to_degrees()),
-        checked: figure("checks").is_some_and(|c| c > 0.0),
+        checked,
         steps_to_walk: figure("steps_to_walk"),
         time_to_walk_s: figure("time_to_walk_s"),
         env_steps: rec.summary.env_steps + restart_steps,
         wall_s: rec.summary.wall_s + restart_wall,
-        check_s: figure("check_s").filter(|_| figure("checks").is_some_and(|c| c > 0.0)),
+        check_s: figure("check_s").filter(|_| checked),
         best_win_50: rec.summary.curve.best_win_50,
         restarted_as: restarted_as(&rec.summary),
     }
