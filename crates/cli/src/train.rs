@@ -325,21 +325,20 @@ fn closing(cfg: &TrainConfig, root: &Path, training: &Session) -> String {
                     );
                 }
             }
-            if let Some(limit) = cfg.check.as_ref().and_then(|c| c.max_track_time) {
+            if let Some(margins) = cfg.check.as_ref().and_then(|c| c.margins()) {
                 out += &match training.first_any_walk() {
                     Some(w) => format!(
                         "  first:  {dir}/first-walk/, the first policy at the walking bar \
-                         without the {limit} s margin, came at {} {} ({} env steps, {} of \
-                         training); `{esrl} eval {dir}/first-walk --episodes 10` shows it\n",
+                         without {margins}, came at {} {} ({} env steps, {} of training); \
+                         `{esrl} eval {dir}/first-walk --episodes 10` shows it\n",
                         training.unit(),
                         w.row,
                         w.env_steps,
                         human_duration(w.wall_s),
                     ),
-                    None => format!(
-                        "  first:  no policy met the walking bar even without the {limit} s \
-                         margin\n"
-                    ),
+                    None => {
+                        format!("  first:  no policy met the walking bar even without {margins}\n")
+                    }
                 };
             }
         }

@@ -30,10 +30,19 @@
 //! reach the line within `T` seconds count as finished for the bar; the reported counts and
 //! the ranking's shares are unchanged.
 //!
-//! **The first walk of a run that asks for speed** ([`Checker::check_seeking`]). With a
-//! margin of speed, the run's bar comes later than the first walk a user could have: a walk
-//! that reaches the line within the episode but not within `T`. Until a run has found one,
-//! its checks also judge the bar without the margin ([`CheckResult::walking`]): on the same
+//! **A margin of symmetry** ([`CheckConfig::max_knee_asymmetry`], off by default). A walk
+//! may limp: one knee working harder than the other (knee-torque asymmetry, |L − R| over
+//! their mean, of each episode's mean |torque|; `esrl-metrics`). With `max_knee_asymmetry =
+//! a`, a policy meets the bar only if its episodes' mean knee-torque asymmetry is at most
+//! `a` (0.1: 10 %), judged on every start it ran, the confirmation's included; the reported
+//! counts and the ranking's shares are unchanged, and the mean is in `checks.jsonl`
+//! ([`CheckResult::knee_asymmetry`]).
+//!
+//! **The first walk of a run that asks for more** ([`Checker::check_seeking`]). With a
+//! margin of speed or of symmetry, the run's bar comes later than the first walk a user
+//! could have: a walk that reaches the line within the episode but not within `T`, or
+//! limps. Until a run has found one, its checks also judge the bar without the margins
+//! ([`CheckResult::walking`]): on the same
 //! starts and confirmation starts, each start run once, the ones the check itself stopped
 //! before run for the verdict (stopping, with `stop_early`, once that bar is out of reach
 //! too). The check's own counts, rank and bar are what they are without the verdict, so the
@@ -140,6 +149,10 @@ pub struct CheckConfig {
     /// episode.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_track_time: Option<f64>,
+    /// The bar asks the episodes' mean knee-torque asymmetry to be at most this (a share:
+    /// 0.1 is 10 %; module docs, "A margin of symmetry"). Default none: any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_knee_asymmetry: Option<f64>,
     /// Stop a check once the bar is out of its reach (module docs, "Stopping early").
     /// Default false: every start runs.
     #[serde(skip_serializing_if = "is_false")]
@@ -160,6 +173,7 @@ impl Default for CheckConfig {
             walk_share: 0.5,
             confirm_starts: 0,
             max_track_time: None,
+            max_knee_asymmetry: None,
             stop_early: false,
             mean: false,
         }
@@ -192,6 +206,11 @@ impl CheckConfig {
                 crate::bail!("check.max_track_time = {t}: must be a time > 0 s");
             }
         }
+        if let Some(a) = self.max_knee_asymmetry {
+            if !(a.is_finite() && a >= 0.0) {
+                crate::bail!("check.max_knee_asymmetry = {a}: must be a share ≥ 0 (0.1 is 10 %)");
+            }
+        }
         for (name, v) in [
             ("finish_share", self.finish_share),
             ("walk_share", self.walk_share),
@@ -201,6 +220,25 @@ impl CheckConfig {
             }
         }
         Ok(())
+    }
+
+    /// Whether the bar has a margin of speed or of symmetry, so that a run seeks its first
+    /// walk without them as well (module docs).
+    pub fn has_margin(&self) -> bool {
+        self.max_track_time.is_some() || self.max_knee_asymmetry.is_some()
+    }
+
+    /// "the 40 s margin", "the 10 % knee-asymmetry margin", or both joined by "and" (`None`
+    /// without a margin).
+    pub fn margins(&self) -> Option<String> {
+        let speed = self.max_track_time.map(|t| format!("the {t} s margin"));
+        let symmetry = self
+            .max_knee_asymmetry
+            .map(|a| format!("the {} % knee-asymmetry margin", percent(a)));
+        match (speed, symmetry) {
+            (Some(a), Some(b)) => Some(format!("{a} and {b}")),
+            (a, b) => a.or(b),
+        }
     }
 
     /// The gait-clock phase of start `k`: `(k + ½) / starts` for the first `starts`, then
@@ -236,11 +274,16 @@ pub struct CheckResult {
     pub mean_distance: f64,
     /// Mean track time of the episodes that reached the end of the track, s.
     pub track_time: Option<f64>,
+    /// With [`CheckConfig::max_knee_asymmetry`], the episodes' mean knee-torque asymmetry (a
+    /// share); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub knee_asymmetry: Option<f64>,
     /// Whether the policy meets the walking bar.
     pub at_bar: bool,
-    /// Whether it meets the walking bar without [`CheckConfig::max_track_time`]'s margin,
-    /// on all its starts, confirmation included: judged only while a run with that margin
-    /// seeks its first walk ([`Checker::check_seeking`]); absent otherwise.
+    /// Whether it meets the walking bar without the margins of speed and symmetry
+    /// ([`CheckConfig::max_track_time`], [`CheckConfig::max_knee_asymmetry`]), on all its
+    /// starts, confirmation included: judged only while a run with a margin seeks its first
+    /// walk ([`Checker::check_seeking`]); absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub walking: Option<bool>,
     /// Environment steps of the episodes the result counts (a stopped check's skipped and
@@ -306,14 +349,14 @@ impl CheckResult {
             self.mean_forward_velocity,
             if self.at_bar { " (at the bar)" } else { "" },
             if !self.at_bar && self.walking == Some(true) {
-                " (at the bar without the margin of speed, on all its starts)"
+                " (at the bar without the margins, on all its starts)"
             } else {
                 ""
             },
             match (self.stopped, self.walking) {
                 (false, _) => "",
                 (true, None) => " (stopped: the bar out of reach)",
-                (true, Some(_)) => " (stopped: the bar with the margin of speed out of reach)",
+                (true, Some(_)) => " (stopped: the bar with its margins out of reach)",
             }
         )
     }
@@ -361,8 +404,9 @@ impl Checker {
     }
 
     /// [`Checker::check`], and with `seeking` (the run has not found its first walk yet)
-    /// and a [`CheckConfig::max_track_time`], the verdict [`CheckResult::walking`] on the bar
-    /// without that margin (module docs, "The first walk of a run that asks for speed").
+    /// and a margin ([`CheckConfig::has_margin`]), the verdict [`CheckResult::walking`] on
+    /// the bar without the margins (module docs, "The first walk of a run that asks for
+    /// more").
     pub fn check_seeking(
         &self,
         agent: &Agent,
@@ -379,20 +423,21 @@ impl Checker {
         } else {
             self.run_phase(agent, starts..starts + confirm, &mut episodes, stop, kept)?
         };
-        if seeking && self.config.max_track_time.is_some() {
+        if seeking && self.config.has_margin() {
             result.walking = Some(self.walking(agent, episodes, stop)?);
         }
         Ok(result)
     }
 
-    /// Whether the policy meets the bar without the margin of speed, on its starts and (when
-    /// it does on those) its confirmation's, given the `episodes` a check of it ran (in start
-    /// order); the starts the check did not run are run here, stopping once that bar is out
-    /// of reach when `stop`.
+    /// Whether the policy meets the bar without the margins of speed and symmetry, on its
+    /// starts and (when it does on those) its confirmation's, given the `episodes` a check
+    /// of it ran (in start order); the starts the check did not run are run here, stopping
+    /// once that bar is out of reach when `stop`.
     fn walking(&self, agent: &Agent, mut episodes: Vec<Start>, stop: bool) -> Result<bool> {
         let untimed = Checker {
             config: CheckConfig {
                 max_track_time: None,
+                max_knee_asymmetry: None,
                 ..self.config.clone()
             },
             ..self.clone()
@@ -527,6 +572,7 @@ impl Checker {
             return Ok(Start {
                 class: GaitClass::Fall,
                 track_time: None,
+                knee_asymmetry: None,
                 fell: true,
                 speed: 0.0,
                 distance: 0.0,
@@ -539,12 +585,18 @@ impl Checker {
         Ok(Start {
             class: g.cycle.as_ref().map_or(GaitClass::Fall, |c| c.gait_class),
             track_time: g.track_time,
+            knee_asymmetry: Some(g.knee_torque_asymmetry),
             fell: g.fell,
             speed: g.mean_forward_velocity,
             distance: g.distance,
             steps,
         })
     }
+}
+
+/// A share as a percentage, rounded to 0.01 (0.07 → 7, not 7.000000000000001).
+fn percent(share: f64) -> f64 {
+    (share * 10_000.0).round() / 100.0
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -571,6 +623,19 @@ fn judge(config: &CheckConfig, episodes: &[Start], confirm: usize, stopped: bool
     let starts = episodes.len();
     let n = starts as f64;
     let walks = classes.get(&GaitClass::Walk).copied().unwrap_or(0);
+    // The mean over every episode: one without gait metrics (a simulation that failed at
+    // once) is no even walk, and leaves the mean undefined.
+    let knee_asymmetry = config.max_knee_asymmetry.map(|_| {
+        episodes
+            .iter()
+            .map(|e| e.knee_asymmetry.unwrap_or(f64::NAN))
+            .sum::<f64>()
+            / n
+    });
+    let even = match (config.max_knee_asymmetry, knee_asymmetry) {
+        (Some(limit), Some(a)) => a <= limit,
+        _ => true,
+    };
     CheckResult {
         starts,
         confirm_starts: confirm,
@@ -579,9 +644,11 @@ fn judge(config: &CheckConfig, episodes: &[Start], confirm: usize, stopped: bool
         mean_forward_velocity: episodes.iter().map(|e| e.speed).sum::<f64>() / n,
         mean_distance: episodes.iter().map(|e| e.distance).sum::<f64>() / n,
         track_time: (!times.is_empty()).then(|| times.iter().sum::<f64>() / times.len() as f64),
+        knee_asymmetry,
         at_bar: !stopped
             && in_time as f64 >= config.finish_share * n - 1e-9
-            && walks as f64 > config.walk_share * n,
+            && walks as f64 > config.walk_share * n
+            && even,
         walking: None,
         check_steps: episodes.iter().map(|e| e.steps).sum(),
         stopped,
@@ -682,6 +749,8 @@ impl Reach {
 struct Start {
     class: GaitClass,
     track_time: Option<f64>,
+    /// The episode's knee-torque asymmetry (none when it has no gait metrics).
+    knee_asymmetry: Option<f64>,
     fell: bool,
     speed: f64,
     distance: f64,
@@ -908,6 +977,7 @@ mod tests {
                 GaitClass::Walk
             },
             track_time: finished.then_some(50.0),
+            knee_asymmetry: Some(0.05),
             fell,
             speed: 1.0,
             distance: if finished { 50.0 } else { 10.0 },
@@ -975,6 +1045,62 @@ mod tests {
         for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
             assert!(limit(bad).validate().is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn with_a_symmetry_margin_the_mean_knee_asymmetry_of_every_episode_decides() {
+        // 10 walks to the line: 6 even (4 %) and 4 limping (24 %): a mean of 12 %.
+        let mut episodes: Vec<Start> = (0..10)
+            .map(|k| Start {
+                knee_asymmetry: Some(if k < 6 { 0.04 } else { 0.24 }),
+                ..start(true, false)
+            })
+            .collect();
+        let plain = judge(&CheckConfig::default(), &episodes, 0, false);
+        assert!(plain.at_bar);
+        assert_eq!(plain.knee_asymmetry, None, "reported only with the margin");
+        let margin = |a: f64| CheckConfig {
+            max_knee_asymmetry: Some(a),
+            ..CheckConfig::default()
+        };
+        let limping = judge(&margin(0.10), &episodes, 0, false);
+        assert!(!limping.at_bar);
+        assert!((limping.knee_asymmetry.unwrap() - 0.12).abs() < 1e-12);
+        // The counts and the rank's shares do not see the margin: below the bar, it ranks
+        // below the same episodes judged without it, and beside them otherwise.
+        assert_eq!(limping.finished, 10);
+        assert!(plain.beats(&limping));
+        let (l, p) = (limping.score(), plain.score());
+        assert_eq!((l.1, l.2, l.3, l.4), (p.1, p.2, p.3, p.4));
+        // At most the limit (inclusive): at the bar.
+        assert!(judge(&margin(0.12 + 1e-12), &episodes, 0, false).at_bar);
+        // Judged on the confirmation's episodes too: 10 more even ones bring the mean to 8 %.
+        episodes.extend((0..10).map(|_| Start {
+            knee_asymmetry: Some(0.04),
+            ..start(true, false)
+        }));
+        let confirmed = judge(&margin(0.10), &episodes, 10, false);
+        assert!(confirmed.at_bar);
+        assert!((confirmed.knee_asymmetry.unwrap() - 0.08).abs() < 1e-12);
+        // An episode without gait metrics leaves no mean, and no walk at the bar.
+        episodes[0].knee_asymmetry = None;
+        assert!(!judge(&margin(10.0), &episodes, 10, false).at_bar);
+        for bad in [-0.1, f64::NAN, f64::INFINITY] {
+            assert!(margin(bad).validate().is_err(), "{bad}");
+        }
+        assert_eq!(
+            margin(0.07).margins().as_deref(),
+            Some("the 7 % knee-asymmetry margin")
+        );
+        let both = CheckConfig {
+            max_track_time: Some(40.0),
+            ..margin(0.125)
+        };
+        assert_eq!(
+            both.margins().as_deref(),
+            Some("the 40 s margin and the 12.5 % knee-asymmetry margin")
+        );
+        assert!(margin(0.1).has_margin() && !CheckConfig::default().has_margin());
     }
 
     #[test]

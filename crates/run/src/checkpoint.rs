@@ -333,8 +333,9 @@ pub fn save_best(run: &Path, cfg: &TrainConfig, agent: &Agent, info: &BestInfo) 
     save_policy(run, BEST, cfg, agent, info)
 }
 
-/// The folder of the first walk of a run that asks for speed (`check.max_track_time`): the
-/// first policy at the walking bar without that margin, in [`save_best`]'s layout.
+/// The folder of the first walk of a run that asks for speed or symmetry
+/// (`check.max_track_time`, `check.max_knee_asymmetry`): the first policy at the walking bar
+/// without those margins, in [`save_best`]'s layout.
 pub const FIRST_WALK: &str = "first-walk";
 
 /// Writes `agent` as a policy folder `RUN/<name>/` in [`save_best`]'s layout.

@@ -233,8 +233,8 @@ impl Session {
         each!(&self.training, t => t.first_walk())
     }
 
-    /// [`Training::first_any_walk`]: with a margin of speed, the first check at the bar
-    /// without it.
+    /// [`Training::first_any_walk`]: with a margin of speed or symmetry, the first check at
+    /// the bar without the margins.
     pub fn first_any_walk(&self) -> Option<&CheckRecord> {
         each!(&self.training, t => t.first_any_walk())
     }

@@ -459,8 +459,9 @@ impl<L: Learner> Training<L> {
         self.state.check.as_ref()?.first_walk.as_ref()
     }
 
-    /// With `check.max_track_time`, the first check that met the walking bar without that
-    /// margin (its policy in `RUN/first-walk/`), if any.
+    /// With a margin of speed or symmetry (`check.max_track_time`,
+    /// `check.max_knee_asymmetry`), the first check that met the walking bar without the
+    /// margins (its policy in `RUN/first-walk/`), if any.
     pub fn first_any_walk(&self) -> Option<&CheckRecord> {
         self.state.check.as_ref()?.first_any_walk.as_ref()
     }
@@ -595,7 +596,7 @@ impl<L: Learner> Training<L> {
             trigger,
             may_stop: self.restart_settled(),
             kept: self.kept_check().map(|k| k.result.clone()),
-            seeking: cfg.max_track_time.is_some()
+            seeking: cfg.has_margin()
                 && self
                     .state
                     .check

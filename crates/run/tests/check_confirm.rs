@@ -222,3 +222,56 @@ fn a_check_seeking_the_first_walk_judges_the_bar_without_the_margin_too() {
         .unwrap();
     assert!(walk.at_bar && walk.walking.is_none(), "{}", walk.describe());
 }
+
+/// Contract: a margin of symmetry (`check.max_knee_asymmetry`) holds a walk whose knees work
+/// unevenly below the bar, and changes nothing else a check reports: with a margin above the
+/// flagship's knee-torque asymmetry its check is the plain one plus the mean asymmetry; with
+/// one below it the flagship misses the bar with the same counts, and a check seeking the
+/// first walk finds it at the bar without the margin.
+#[test]
+fn a_margin_of_symmetry_holds_an_uneven_walk_below_the_bar() {
+    let (cfg, walker, _) = walker_and_stander();
+    let plain = CheckConfig {
+        starts: 2,
+        finish_share: 1.0,
+        ..CheckConfig::default()
+    };
+    let checker = |config: CheckConfig| checker_on(&cfg, config);
+    let full = checker(plain.clone()).check(&walker, false, None).unwrap();
+    assert!(
+        full.at_bar && full.knee_asymmetry.is_none(),
+        "{}",
+        full.describe()
+    );
+    let loose = checker(CheckConfig {
+        max_knee_asymmetry: Some(1.0),
+        ..plain.clone()
+    })
+    .check(&walker, false, None)
+    .unwrap();
+    let a = loose.knee_asymmetry.expect("reported with the margin");
+    // The flagship's knees differ by about 10 % (results/walking/flagship).
+    assert!(a > 0.01 && a < 0.5, "knee asymmetry {a}");
+    assert_eq!(
+        CheckResult {
+            knee_asymmetry: None,
+            ..loose
+        },
+        full
+    );
+    let tight = CheckConfig {
+        max_knee_asymmetry: Some(0.5 * a),
+        ..plain
+    };
+    let uneven = checker(tight.clone()).check(&walker, false, None).unwrap();
+    assert!(!uneven.at_bar, "{}", uneven.describe());
+    assert_eq!(
+        (uneven.finished, uneven.falls, &uneven.classes),
+        (full.finished, full.falls, &full.classes)
+    );
+    assert!(full.beats(&uneven));
+    let seeking = checker(tight)
+        .check_seeking(&walker, false, None, true)
+        .unwrap();
+    assert_eq!(seeking.walking, Some(true), "{}", seeking.describe());
+}

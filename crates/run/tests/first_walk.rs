@@ -1,5 +1,6 @@
-//! Contract: a run whose check asks for a margin of speed (`check.max_track_time`) keeps the
-//! first policy at the walking bar without that margin in `RUN/first-walk/`, and its summary
+//! Contract: a run whose check asks for a margin of speed (`check.max_track_time`), or of
+//! symmetry (`check.max_knee_asymmetry`), keeps the first policy at the walking bar without
+//! the margins in `RUN/first-walk/`, and its summary
 //! says when it came (`steps_to_any_walk`, `time_to_any_walk_s`), while its own bar, kept
 //! policy and stop stay those of the margin. A run without a margin writes neither. The run
 //! starts from the committed flagship walk (about 46 s over the 50 m) with the ES at a tiny
@@ -86,6 +87,23 @@ fn the_first_walk_below_the_speed_margin_is_kept_and_timed() {
     let time = s["time_to_any_walk_s"].as_f64().unwrap();
     assert!((time - any.wall_s).abs() < 1e-9, "{time} vs {}", any.wall_s);
     assert!(s.get("steps_to_walk").is_none(), "{s}");
+
+    // A margin of symmetry the flagship misses (its knees differ by about 10 %) is a
+    // margin too: its first walk without the margins is kept, its bar's is not met.
+    let even = tmp.path().join("even");
+    let mut cfg = config(None);
+    if let Some(check) = &mut cfg.check {
+        check.max_knee_asymmetry = Some(0.001);
+    }
+    let (first, any) = train(&cfg, &even);
+    assert!(
+        first.is_none(),
+        "an uneven walk is not at the bar: {first:?}"
+    );
+    let any = any.expect("the flagship walks to the line");
+    assert_eq!((any.result.walking, any.result.at_bar), (Some(true), false));
+    assert!(any.result.knee_asymmetry.is_some_and(|a| a > 0.001));
+    assert!(even.join(FIRST_WALK).join("best.json").exists());
 
     // Without a margin the run's first walk is its bar's: no second folder or figure.
     let plain = tmp.path().join("plain");
