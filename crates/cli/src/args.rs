@@ -36,13 +36,15 @@ pub enum Command {
 /// Options shared by commands that train.
 #[derive(Debug, Clone, Args)]
 pub struct TrainOptions {
-    /// Named settings; a --config file and the flags below override them. `walker` (the
-    /// default) is the recipe that walks on torque actions, stops at the first walk that
-    /// finishes every check start and starts over from another seed when a run has not got
-    /// going; `walker-fast` the same asking for a walk within 40 s (a faster gait clock, 5 M
-    /// env steps); `walking-torque` the same without the stricter stop and the restart;
-    /// `walking` the recipe on joint-angle targets; `paper` the paper's literal §5 protocol.
-    #[arg(long, value_enum, default_value_t = Preset::Walker)]
+    /// Named settings; a --config file and the flags below override them. `walker-mirror`
+    /// (the default) is the recipe that walks within 40 s on torque actions, learning from
+    /// left↔right mirrored transitions and keeping the ES mean when it walks best;
+    /// `walker-fast` the same without the mirror and the mean's check; `walker` the recipe
+    /// with a 1 s gait clock (walks of 47–59 s; 4 M env steps), stopping at the first walk that
+    /// finishes every check start and starting over from another seed when a run has not got
+    /// going; `walking-torque` `walker` without the stricter stop and the restart; `walking`
+    /// the recipe on joint-angle targets; `paper` the paper's literal §5 protocol.
+    #[arg(long, value_enum, default_value_t = Preset::WalkerMirror)]
     pub preset: Preset,
     /// TOML file overriding the preset (same keys as a run folder's config.toml).
     #[arg(long, value_name = "FILE.toml")]

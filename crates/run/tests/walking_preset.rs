@@ -100,19 +100,18 @@ fn walking_torque_is_walking_on_torques_until_the_first_walk() {
     }
 }
 
-/// The default preset is `walking-torque` with the stricter stop (all 10 check starts at
-/// the line, then 19 of 20; checks stopped once out of reach) and `[restart]` at its
-/// defaults: those keys and nothing else on
-/// the walking env; on the pendulum (no check, so no restart) every preset of the recipe
-/// resolves alike.
+/// `walker` is `walking-torque` with the stricter stop (all 10 check starts at the line,
+/// then 19 of 20; checks stopped once out of reach) and `[restart]` at its defaults: those
+/// keys and nothing else on the walking env; on the pendulum (no check, so no restart) every
+/// preset of the recipe resolves alike.
 #[test]
-fn the_default_is_walking_torque_with_a_stricter_stop_and_restarts() {
-    assert_eq!(Preset::default(), Preset::Walker);
+fn walker_is_walking_torque_with_a_stricter_stop_and_restarts() {
     for agent in AgentKind::ALL {
         let torque =
             TrainConfig::resolve(agent, &options(Preset::WalkingTorque, None, None), Some(0))
                 .unwrap();
-        let walker = TrainConfig::resolve(agent, &Overrides::default(), Some(0)).unwrap();
+        let walker =
+            TrainConfig::resolve(agent, &options(Preset::Walker, None, None), Some(0)).unwrap();
         assert_eq!(walker.preset, Preset::Walker);
         let differ = esrl_run::config::config_differences(&torque, &walker).unwrap();
         assert_eq!(
@@ -141,10 +140,10 @@ fn the_default_is_walking_torque_with_a_stricter_stop_and_restarts() {
 }
 
 /// Contract: `results/clock-fast/fast40.toml`, the file the screen's runs are written as, is
-/// the default (`walker`) with its 0.8 s gait clock, speed paid up to 1.4 m/s and a stop at
-/// the line within 40 s, and changes nothing else; the preset `walker-fast` is the same with
-/// a budget of 5 M env steps instead of 4 on the walk, and `walker` on the pendulum, for
-/// every agent.
+/// `walker` (the default until 2026-12-07) with its 0.8 s gait clock, speed paid up to
+/// 1.4 m/s and a stop at the line within 40 s, and changes nothing else; the preset
+/// `walker-fast` is the same with a budget of 5 M env steps instead of 4 on the walk, and
+/// `walker` on the pendulum, for every agent.
 #[test]
 fn the_fast40_file_is_walker_with_a_faster_clock_a_higher_cap_and_a_stop_at_40_s() {
     let file =
@@ -184,6 +183,47 @@ fn the_fast40_file_is_walker_with_a_faster_clock_a_higher_cap_and_a_stop_at_40_s
             |preset| without_preset_name(&TrainConfig::preset(agent, EnvKind::Pendulum, preset));
         assert_eq!(
             pendulum(Preset::WalkerFast),
+            pendulum(Preset::Walker),
+            "{agent:?}"
+        );
+    }
+}
+
+/// The default preset is `walker-mirror`: `walker-fast` with mirrored transitions
+/// (`rl.mirror`, every agent) and the ES mean's check (`check.mean`, the hybrid agents, which
+/// have a mean) on the walking env, and nothing else; on the pendulum, which has no mirror
+/// and no check, it resolves as `walker` does. The study the default was chosen on ran
+/// `walker-fast` with exactly these two keys set
+/// (`results/unseen-starts/mirror-mean/study.toml`).
+#[test]
+fn the_default_is_walker_fast_with_mirrored_transitions_and_the_means_check() {
+    assert_eq!(Preset::default(), Preset::WalkerMirror);
+    for agent in AgentKind::ALL {
+        let fast =
+            TrainConfig::resolve(agent, &options(Preset::WalkerFast, None, None), Some(0)).unwrap();
+        let default = TrainConfig::resolve(agent, &Overrides::default(), Some(0)).unwrap();
+        assert_eq!(default.preset, Preset::WalkerMirror);
+        let differ = esrl_run::config::config_differences(&fast, &default).unwrap();
+        let mut expected = vec![
+            "preset: \"walker-fast\" vs \"walker-mirror\"",
+            // `mirror = false` is left out of config.toml: "none".
+            "rl.mirror: none vs true",
+        ];
+        if agent.is_hybrid() {
+            // `mean = false` is left out of config.toml: "none".
+            expected.insert(0, "check.mean: none vs true");
+        }
+        assert_eq!(differ, expected, "{agent:?}");
+        let pendulum = |preset| {
+            let o = Overrides {
+                preset,
+                env: Some(EnvKind::Pendulum),
+                ..Overrides::default()
+            };
+            without_preset_name(&TrainConfig::resolve(agent, &o, Some(0)).unwrap())
+        };
+        assert_eq!(
+            pendulum(Preset::WalkerMirror),
             pendulum(Preset::Walker),
             "{agent:?}"
         );
