@@ -683,8 +683,9 @@ pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-30 min at --thr
 /// median of the nine of ten seeds that met the stop (1.34–3.04 M env steps), measured: the
 /// stop at 2.46 M env steps after 876 s, the first walk at any speed at 1.01 M after 373 s,
 /// 2,830 env steps/s. The range follows from the steps at that rate; seed 8, which started
-/// over at 1 M and spent the 5 M (6.02 M in all), from its steps at that rate, not measured.
-pub const TIME_WALKER_MIRROR: &str = "until a walk within 40 s: 8-18 min at --threads 2 on an idle 2-core machine (median over ten seeds about 14.6 min, measured on the median seed, 2: 14.6 min; 9 of 10 seeds get there), otherwise about 35 min for a restart and the whole 5 M env steps (6 M in all, at the measured rate); the first walk at any speed, kept in RUN/first-walk/, after 2-8 min (6.2 min measured on seed 2)";
+/// over at 1 M and spent the 5 M (6.02 M in all), from its steps at that rate, not measured;
+/// the median over all ten (between seeds 2 and 9, 2.46 and 2.60 M) at that rate, 14.9 min.
+pub const TIME_WALKER_MIRROR: &str = "until a walk within 40 s: 8-18 min at --threads 2 on an idle 2-core machine (median over ten seeds about 15 min; 14.6 min measured on seed 2, the median of the nine that get there), otherwise about 35 min for a restart and the whole 5 M env steps (6 M in all, at the measured rate); the first walk at any speed, kept in RUN/first-walk/, after 2-8 min (6.2 min measured on seed 2)";
 /// `--preset walking-torque`'s time (until the first policy at the walking bar) at
 /// `--threads 2` on an idle 2-core Intel Xeon, measured on
 /// seeds 4, 1 and 5 of `results/torque`'s seed study (`results/speed`, "Time to walk of the
