@@ -9,6 +9,16 @@ use esrl_agents::LearnEvery;
 use esrl_run::{AgentKind, EnvKind, Overrides, Preset, TrainConfig};
 use std::path::PathBuf;
 
+/// `preset` resolved for `agent` on the pendulum, without its name.
+fn on_pendulum(agent: AgentKind, preset: Preset) -> String {
+    let o = Overrides {
+        preset,
+        env: Some(EnvKind::Pendulum),
+        ..Overrides::default()
+    };
+    without_preset_name(&TrainConfig::resolve(agent, &o, Some(0)).unwrap())
+}
+
 #[test]
 fn walking_is_quick_with_the_documented_overlay() {
     let overlay =
@@ -126,14 +136,7 @@ fn walker_is_walking_torque_with_a_stricter_stop_and_restarts() {
             ],
             "{agent:?}"
         );
-        let on = |preset| {
-            let o = Overrides {
-                preset,
-                env: Some(EnvKind::Pendulum),
-                ..Overrides::default()
-            };
-            without_preset_name(&TrainConfig::resolve(agent, &o, Some(0)).unwrap())
-        };
+        let on = |preset| on_pendulum(agent, preset);
         assert_eq!(on(Preset::Walker), on(Preset::Walking), "{agent:?}");
         assert_eq!(on(Preset::WalkingTorque), on(Preset::Walking), "{agent:?}");
     }
@@ -214,17 +217,9 @@ fn the_default_is_walker_fast_with_mirrored_transitions_and_the_means_check() {
             expected.insert(0, "check.mean: none vs true");
         }
         assert_eq!(differ, expected, "{agent:?}");
-        let pendulum = |preset| {
-            let o = Overrides {
-                preset,
-                env: Some(EnvKind::Pendulum),
-                ..Overrides::default()
-            };
-            without_preset_name(&TrainConfig::resolve(agent, &o, Some(0)).unwrap())
-        };
         assert_eq!(
-            pendulum(Preset::WalkerMirror),
-            pendulum(Preset::Walker),
+            on_pendulum(agent, Preset::WalkerMirror),
+            on_pendulum(agent, Preset::Walker),
             "{agent:?}"
         );
     }
