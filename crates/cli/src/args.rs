@@ -36,15 +36,17 @@ pub enum Command {
 /// Options shared by commands that train.
 #[derive(Debug, Clone, Args)]
 pub struct TrainOptions {
-    /// Named settings; a --config file and the flags below override them. `walker-mirror`
+    /// Named settings; a --config file and the flags below override them. `walker-even`
     /// (the default) is the recipe that walks within 40 s on torque actions, learning from
-    /// left↔right mirrored transitions and keeping the ES mean when it walks best;
-    /// `walker-fast` the same without the mirror and the mean's check; `walker` the recipe
-    /// with a 1 s gait clock (walks of 47–59 s; 4 M env steps), stopping at the first walk that
-    /// finishes every check start and starting over from another seed when a run has not got
-    /// going; `walking-torque` `walker` without the stricter stop and the restart; `walking`
-    /// the recipe on joint-angle targets; `paper` the paper's literal §5 protocol.
-    #[arg(long, value_enum, default_value_t = Preset::WalkerMirror)]
+    /// left↔right mirrored transitions, keeping the ES mean when it walks best and stopping
+    /// only at a walk whose knees work alike (knee-torque asymmetry ≤ 10 %); `walker-mirror`
+    /// the same without that margin of symmetry; `walker-fast` also without the mirror and
+    /// the mean's check; `walker` the recipe with a 1 s gait clock (walks of 47–59 s; 4 M env
+    /// steps), stopping at the first walk that finishes every check start and starting over
+    /// from another seed when a run has not got going; `walking-torque` `walker` without the
+    /// stricter stop and the restart; `walking` the recipe on joint-angle targets; `paper` the
+    /// paper's literal §5 protocol.
+    #[arg(long, value_enum, default_value_t = Preset::WalkerEven)]
     pub preset: Preset,
     /// TOML file overriding the preset (same keys as a run folder's config.toml).
     #[arg(long, value_name = "FILE.toml")]

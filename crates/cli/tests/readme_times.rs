@@ -2,8 +2,8 @@
 //! (`TrainConfig::typical_time`), and the README's quick start states the same ones.
 
 use esrl_run::config::{
-    TIME_PENDULUM, TIME_QUICK, TIME_WALKER, TIME_WALKER_FAST, TIME_WALKER_MIRROR, TIME_WALKING,
-    TIME_WALKING_TORQUE,
+    TIME_PENDULUM, TIME_QUICK, TIME_WALKER, TIME_WALKER_EVEN, TIME_WALKER_FAST, TIME_WALKER_MIRROR,
+    TIME_WALKING, TIME_WALKING_TORQUE,
 };
 use esrl_run::{AgentKind, EnvKind, Preset, TrainConfig};
 
@@ -12,6 +12,7 @@ fn the_readme_states_the_banner_times() {
     let readme =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../../README.md")).unwrap();
     for t in [
+        TIME_WALKER_EVEN,
         TIME_WALKER_MIRROR,
         TIME_WALKER,
         TIME_WALKER_FAST,
@@ -23,7 +24,9 @@ fn the_readme_states_the_banner_times() {
         assert!(readme.contains(t), "the README lacks {t:?}");
     }
     let default = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::default());
-    assert_eq!(default.typical_time(), Some(TIME_WALKER_MIRROR));
+    assert_eq!(default.typical_time(), Some(TIME_WALKER_EVEN));
+    let mirror = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::WalkerMirror);
+    assert_eq!(mirror.typical_time(), Some(TIME_WALKER_MIRROR));
     let walker = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::Walker);
     assert_eq!(walker.typical_time(), Some(TIME_WALKER));
     let fast = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::WalkerFast);

@@ -192,21 +192,21 @@ fn the_fast40_file_is_walker_with_a_faster_clock_a_higher_cap_and_a_stop_at_40_s
     }
 }
 
-/// The default preset is `walker-mirror`: `walker-fast` with mirrored transitions
+/// `walker-mirror` is `walker-fast` with mirrored transitions
 /// (`rl.mirror`, every agent) and the ES mean's check (`check.mean`, the hybrid agents, which
 /// have a mean) on the walking env, and nothing else; on the pendulum, which has no mirror
-/// and no check, it resolves as `walker` does. The study the default was chosen on ran
+/// and no check, it resolves as `walker` does. The study it was chosen on ran
 /// `walker-fast` with exactly these two keys set
 /// (`results/unseen-starts/mirror-mean/study.toml`).
 #[test]
-fn the_default_is_walker_fast_with_mirrored_transitions_and_the_means_check() {
-    assert_eq!(Preset::default(), Preset::WalkerMirror);
+fn walker_mirror_is_walker_fast_with_mirrored_transitions_and_the_means_check() {
     for agent in AgentKind::ALL {
         let fast =
             TrainConfig::resolve(agent, &options(Preset::WalkerFast, None, None), Some(0)).unwrap();
-        let default = TrainConfig::resolve(agent, &Overrides::default(), Some(0)).unwrap();
-        assert_eq!(default.preset, Preset::WalkerMirror);
-        let differ = esrl_run::config::config_differences(&fast, &default).unwrap();
+        let mirror =
+            TrainConfig::resolve(agent, &options(Preset::WalkerMirror, None, None), Some(0))
+                .unwrap();
+        let differ = esrl_run::config::config_differences(&fast, &mirror).unwrap();
         let mut expected = vec![
             "preset: \"walker-fast\" vs \"walker-mirror\"",
             // `mirror = false` is left out of config.toml: "none".
@@ -219,6 +219,42 @@ fn the_default_is_walker_fast_with_mirrored_transitions_and_the_means_check() {
         assert_eq!(differ, expected, "{agent:?}");
         assert_eq!(
             on_pendulum(agent, Preset::WalkerMirror),
+            on_pendulum(agent, Preset::Walker),
+            "{agent:?}"
+        );
+    }
+}
+
+/// The default preset is `walker-even`: `walker-mirror` with a margin of symmetry in the
+/// walking check (`check.max_knee_asymmetry = 0.1`, every agent, on the walking env), and
+/// nothing else; on the pendulum, which has no check, it resolves as `walker` does. Its seed
+/// study ran `walker-mirror` with exactly this key set
+/// (`results/unseen-starts/mirror-mean-even/study.toml`).
+#[test]
+fn the_default_is_walker_mirror_with_a_margin_of_symmetry() {
+    assert_eq!(Preset::default(), Preset::WalkerEven);
+    for agent in AgentKind::ALL {
+        let mirror =
+            TrainConfig::resolve(agent, &options(Preset::WalkerMirror, None, None), Some(0))
+                .unwrap();
+        let default = TrainConfig::resolve(agent, &Overrides::default(), Some(0)).unwrap();
+        assert_eq!(default.preset, Preset::WalkerEven);
+        assert_eq!(
+            default.check.as_ref().unwrap().max_knee_asymmetry,
+            Some(0.1)
+        );
+        let differ = esrl_run::config::config_differences(&mirror, &default).unwrap();
+        assert_eq!(
+            differ,
+            [
+                // No margin is left out of config.toml: "none".
+                "check.max_knee_asymmetry: none vs 0.1",
+                "preset: \"walker-mirror\" vs \"walker-even\"",
+            ],
+            "{agent:?}"
+        );
+        assert_eq!(
+            on_pendulum(agent, Preset::WalkerEven),
             on_pendulum(agent, Preset::Walker),
             "{agent:?}"
         );

@@ -16,7 +16,7 @@
 //!
 //! [[arm]]
 //! name = "default"
-//! agent = "es-sac"                # preset "walker-mirror" (the default) unless `preset` says otherwise
+//! agent = "es-sac"                # preset "walker-even" (the default) unless `preset` says otherwise
 //!
 //! [[arm]]
 //! name = "mirror"
@@ -180,7 +180,7 @@ pub struct Arm {
     pub name: String,
     /// The agent.
     pub agent: AgentKind,
-    /// The preset underneath (default `walker-mirror`).
+    /// The preset underneath (default `walker-even`).
     #[serde(default)]
     pub preset: Option<Preset>,
     /// A TOML file laid over the preset, relative to the study file.

@@ -20,7 +20,7 @@ from typing import Any, Callable, Dict, List, Optional, TypeVar
 T = TypeVar("T")
 
 AGENTS = ["es-sac", "es-td3", "es-ddpg", "sac", "td3", "ddpg"]
-PRESETS = ["paper", "quick", "long", "walking", "walking-torque", "walker", "walker-fast", "walker-mirror", "smoke"]
+PRESETS = ["paper", "quick", "long", "walking", "walking-torque", "walker", "walker-fast", "walker-mirror", "walker-even", "smoke"]
 ENVS = ["walk", "pendulum"]
 
 
@@ -41,7 +41,7 @@ def _parser() -> argparse.ArgumentParser:
     t.add_argument("agent", choices=AGENTS)
     t.add_argument("--seed", type=int, help="seed of every random stream in the run")
     t.add_argument("--out", metavar="DIR", help="run folder [default: runs/<agent>-s<seed>, "
-                   "runs/<agent>-<preset>-s<seed> for a preset other than walker-mirror]")
+                   "runs/<agent>-<preset>-s<seed> for a preset other than walker-even]")
     t.add_argument(
         "--resume",
         metavar="DIR",
@@ -49,7 +49,7 @@ def _parser() -> argparse.ArgumentParser:
         "--generations, --episodes, --steps and --threads may change",
     )
     t.add_argument("--preset", choices=PRESETS,
-                   help="named settings [default: walker-mirror, the recipe that walks; "
+                   help="named settings [default: walker-even, the recipe that walks; "
                    "paper: the paper's literal protocol]")
     t.add_argument("--config", metavar="FILE.toml", help="TOML file overriding the preset")
     t.add_argument("--env", choices=ENVS, help="environment [default: walk]")
