@@ -98,8 +98,15 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
     let restart = cfg.restart.as_ref().map_or(String::new(), |r| {
         format!(
             "\n  restart: from seed + 1000 (at most {} time(s)) when no walk and no check past \
-             {} m by {} env steps",
-            r.max, r.min_distance, r.at_steps
+             {} m by {} env steps{}",
+            r.max,
+            r.min_distance,
+            r.at_steps,
+            match (r.whole_budget, cfg.max_env_steps) {
+                (true, Some(b)) => format!("; the {b} env steps are the whole run's"),
+                (false, Some(_)) => "; each attempt may take the env-step budget".into(),
+                (_, None) => String::new(),
+            }
         )
     });
     let init = cfg.init.as_ref().map_or(String::new(), |p| {
@@ -218,7 +225,7 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
                 || root.display().to_string(),
                 |n| n.to_string_lossy().into_owned(),
             );
-            let steps = training.env_steps();
+            let steps = training.budget_steps();
             let budget = cfg.max_env_steps.map_or(String::new(), |b| format!("/{b}"));
             eprintln!(
                 "[{name}] {}/{total} {unit}s, {steps}{budget} env steps | best so far {:.1} \
@@ -231,7 +238,7 @@ pub fn train(cfg: &TrainConfig, root: &Path, resume: bool, display: Display) -> 
         }
         if log && last_log.elapsed().as_secs_f64() > 10.0 {
             let steps = match cfg.max_env_steps {
-                Some(b) => format!(" | {}/{b} env steps", training.env_steps()),
+                Some(b) => format!(" | {}/{b} env steps", training.budget_steps()),
                 None => String::new(),
             };
             eprintln!(

@@ -26,19 +26,11 @@ fn config(dir: &Path, restart: bool) -> String {
 }
 
 fn train(dir: &Path, seed: &str, generations: &str, config: &str) -> String {
-    smoke(
-        "es-sac",
+    train_with(
         dir,
-        &[
-            "--seed",
-            seed,
-            "--generations",
-            generations,
-            "--threads",
-            "1",
-            "--config",
-            config,
-        ],
+        seed,
+        Path::new(config),
+        &["--generations", generations],
     )
 }
 
@@ -185,6 +177,68 @@ fn a_run_that_has_not_got_going_starts_over_as_the_run_of_seed_plus_1000() {
         tensors(&killed.join("checkpoint/actor.safetensors")),
         tensors(&run.join("checkpoint/actor.safetensors"))
     );
+}
+
+/// With `restart.whole_budget`, `max_env_steps` is the whole run's: the attempt after a
+/// restart stops at the first row where its steps and the abandoned attempt's together reach
+/// the budget, its rows those of the run of seed + 1000 so far (which, given the budget for
+/// itself, goes on).
+#[test]
+fn a_whole_budget_counts_the_abandoned_attempts_steps() {
+    let tmp = tempfile::tempdir().unwrap();
+    let whole = tmp.path().join("whole.toml");
+    std::fs::write(
+        &whole,
+        "check = { starts = 2, every_steps = 100 }\n\
+         restart = { at_steps = 150, min_distance = 5.0, max = 1, whole_budget = true }\n",
+    )
+    .unwrap();
+    let budget = 400;
+    let run = tmp.path().join("run");
+    let args = ["--generations", "60", "--steps", "400"];
+    train_with(&run, "3", &whole, &args);
+    let abandoned = read_json(&run.join("restarts.json"))[0]["env_steps"]
+        .as_u64()
+        .unwrap();
+    assert!(abandoned >= 150 && abandoned < budget, "{abandoned}");
+    let attempt = rows(&run);
+    let steps = |r: &serde_json::Value| r["env_steps"].as_u64().unwrap();
+    let (before, last) = (
+        steps(&attempt[attempt.len() - 2]),
+        steps(attempt.last().unwrap()),
+    );
+    assert!(
+        abandoned + before < budget && abandoned + last >= budget,
+        "stopped at the first row past the whole budget: {abandoned} + {before}, {last}"
+    );
+    let summary = read_json(&run.join("summary.json"));
+    assert_eq!(summary["finished"], true);
+    assert_eq!(summary["restart_env_steps"], abandoned);
+
+    let reference = tmp.path().join("seed-1003");
+    train_with(
+        &reference,
+        "1003",
+        Path::new(&config(tmp.path(), false)),
+        &args,
+    );
+    let full = rows(&reference);
+    assert!(steps(full.last().unwrap()) >= budget, "its own budget");
+    assert!(full.len() > attempt.len());
+    assert_eq!(attempt, full[..attempt.len()]);
+}
+
+fn train_with(dir: &Path, seed: &str, config: &Path, extra: &[&str]) -> String {
+    let mut args = vec![
+        "--seed",
+        seed,
+        "--threads",
+        "1",
+        "--config",
+        config.to_str().unwrap(),
+    ];
+    args.extend(extra);
+    smoke("es-sac", dir, &args)
 }
 
 #[test]

@@ -695,10 +695,13 @@ pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-30 min at --thr
 /// step for step (`walker-mirror`'s: the same checks, stop and kept actor) took 876 s
 /// ([`TIME_WALKER_MIRROR`]) on the same machine earlier that day, so the machine's pace, not
 /// the preset, makes the difference; the figures give both. The range follows from the nine
-/// stops at the two rates; seed 8, which started over at 1 M and spent the 5 M (6.02 M in
-/// all), from its steps at them; the median over all ten (between seeds 2 and 9, 2.46 and
-/// 2.60 M) at them, 14.9–18.0 min.
-pub const TIME_WALKER_EVEN: &str = "until an even walk within 40 s: 8-23 min at --threads 2 on an idle 2-core machine (median over ten seeds 15-18 min; 17.6 min measured on seed 2, the median of the nine that get there, and 14.6 min for the same run earlier that day), otherwise 35-43 min for a restart and the whole 5 M env steps (6 M in all, at the measured rates); the first walk at any speed, kept in RUN/first-walk/, after 2-10 min (7.2 and 6.2 min measured on seed 2)";
+/// stops at the two rates; the median over all ten (between seeds 2 and 9, 2.46 and 2.60 M)
+/// at them, 14.9–18.0 min. Seed 8, which started over at 1 M and spends the whole 4 M env
+/// steps (`restart.whole_budget`), measured: 1,762 s (2,271 env steps/s; `results/speed`,
+/// "The whole budget in 30 minutes"), its first walk at any speed after 1,072 s; 23.6 min at
+/// the faster rate. The first walks at any speed of the other nine seeds (0.41–1.40 M env
+/// steps) at the two rates give 2–10 min.
+pub const TIME_WALKER_EVEN: &str = "until an even walk within 40 s: 8-23 min at --threads 2 on an idle 2-core machine (median over ten seeds 15-18 min; 17.6 min measured on seed 2, the median of the nine that get there, and 14.6 min for the same run earlier that day), otherwise the whole 4 M env steps, a restart's included: 24-30 min (29.4 min measured on seed 8); the first walk at any speed, kept in RUN/first-walk/, after 2-10 min on nine seeds of ten (7.2 and 6.2 min measured on seed 2; 17.9 min on seed 8, after its restart)";
 /// `--preset walker-mirror`'s time (`esrl train es-sac --preset walker-mirror`: until the first
 /// walk that reaches the line within 40 s from every check start) at `--threads 2` on an idle
 /// 2-core Intel Xeon with AMX (`results/unseen-starts/README.md`, "The default

@@ -21,6 +21,10 @@
 //! steps and seconds in `steps_to_walk` and `time_to_walk_s` (what the walk cost), and in
 //! `steps_to_any_walk` and `time_to_any_walk_s` when the run has them.
 //!
+//! **The budget.** Each attempt may take `max_env_steps`, unless
+//! [`RestartConfig::whole_budget`] makes it the whole run's: then the abandoned attempts'
+//! steps count against it and a restart does not lengthen the run.
+//!
 //! ```text
 //! RUN/
 //!   restarts.json          one record per abandoned attempt (Restart), written first
@@ -52,6 +56,10 @@ pub struct RestartConfig {
     pub min_distance: f64,
     /// Most restarts of one run. Default 2 (three attempts).
     pub max: usize,
+    /// Whether `max_env_steps` is the whole run's budget: the abandoned attempts' env steps
+    /// count against it, so a restart does not lengthen the run. Default false: each attempt
+    /// may take `max_env_steps`.
+    pub whole_budget: bool,
 }
 
 impl Default for RestartConfig {
@@ -60,6 +68,7 @@ impl Default for RestartConfig {
             at_steps: 1_000_000,
             min_distance: 15.0,
             max: 2,
+            whole_budget: false,
         }
     }
 }

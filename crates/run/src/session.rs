@@ -28,8 +28,6 @@ pub struct Session {
     start: (usize, u64, Instant),
     /// Whether the estimate was given.
     estimated: bool,
-    /// The environment-step budget, if any.
-    step_budget: Option<u64>,
     /// The run's configuration, its environments and the evaluator of its populations: what
     /// a restart builds the next learner from.
     cfg: TrainConfig,
@@ -109,7 +107,6 @@ impl Session {
             training,
             start: (rows, steps, Instant::now()),
             estimated: false,
-            step_budget: cfg.max_env_steps,
             cfg: cfg.clone(),
             envs: envs.clone(),
             evaluator,
@@ -194,7 +191,7 @@ impl Session {
             self.rows() - rows0,
             self.total().saturating_sub(self.rows()),
             steps.saturating_sub(steps0),
-            self.step_budget.map(|b| b.saturating_sub(steps)),
+            each!(&self.training, t => t.budget_left()),
         )
     }
 
@@ -221,6 +218,11 @@ impl Session {
     /// Environment steps taken.
     pub fn env_steps(&self) -> u64 {
         each!(&self.training, t => t.learner().env_steps())
+    }
+
+    /// [`Training::budget_steps`]: environment steps counted against `max_env_steps`.
+    pub fn budget_steps(&self) -> u64 {
+        each!(&self.training, t => t.budget_steps())
     }
 
     /// Training seconds so far, earlier sessions included.

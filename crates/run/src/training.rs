@@ -442,11 +442,23 @@ impl<L: Learner> Training<L> {
     /// Whether the budget is spent: every row done, the environment-step budget reached, or,
     /// with `stop_at_walk`, a policy at the walking bar found.
     pub fn done(&self) -> bool {
-        let steps_spent = self
-            .cfg
-            .max_env_steps
-            .is_some_and(|b| self.learner.env_steps() >= b);
-        self.state.rows >= self.total() || steps_spent || self.walked_and_stops()
+        self.state.rows >= self.total() || self.budget_left() == Some(0) || self.walked_and_stops()
+    }
+
+    /// Environment steps counted against `max_env_steps`: this attempt's, and with
+    /// `restart.whole_budget` those of the attempts abandoned before it too.
+    pub fn budget_steps(&self) -> u64 {
+        let abandoned = match &self.cfg.restart {
+            Some(rule) if rule.whole_budget => self.attempt.spent().0,
+            _ => 0,
+        };
+        self.learner.env_steps() + abandoned
+    }
+
+    /// Environment steps `max_env_steps` still allows (`None`: no such budget).
+    pub fn budget_left(&self) -> Option<u64> {
+        let spent = self.budget_steps();
+        self.cfg.max_env_steps.map(|b| b.saturating_sub(spent))
     }
 
     /// Whether the run stops because a policy met the walking bar (`stop_at_walk`).
