@@ -67,7 +67,9 @@ pub struct TrainOptions {
     /// Episodes for plain agents.
     #[arg(long)]
     pub episodes: Option<usize>,
-    /// Environment-step budget: training stops once this many steps were taken (any agent).
+    /// Environment-step budget: training stops once this many steps were taken (any agent;
+    /// with `[restart]`, by each attempt, or by the whole run with `restart.whole_budget` as
+    /// in the default preset).
     #[arg(long)]
     pub steps: Option<u64>,
     /// `walk`: stop as soon as a walking check meets the bar (the policy is kept in

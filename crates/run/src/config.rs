@@ -266,7 +266,8 @@ pub struct TrainConfig {
     pub generations: usize,
     /// Training episodes (plain agents). Paper: 1500.
     pub episodes: usize,
-    /// Optional environment-step budget that ends training early (any agent).
+    /// Optional environment-step budget that ends training early (any agent): each attempt's
+    /// under `[restart]`, the whole run's with `restart.whole_budget`.
     pub max_env_steps: Option<u64>,
     /// Gradient updates per ES generation (the inner training cycles). Paper: 50.
     pub inner_cycles: usize,
