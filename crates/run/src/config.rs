@@ -121,7 +121,8 @@ pub enum Preset {
     /// `results/unseen-starts/mirror-mean`. The default until 2026-12-07.
     WalkerMirror,
     /// The default: `walker-mirror` with a margin of symmetry in the walking check (the
-    /// check episodes' mean knee-torque asymmetry at most 10 %, `check.max_knee_asymmetry`):
+    /// check episodes' mean knee-torque asymmetry at most 10 %, `check.max_knee_asymmetry`)
+    /// and a whole budget of 4 M env steps, a restart's included (`restart.whole_budget`):
     /// `results/unseen-starts/mirror-mean-even`.
     #[default]
     WalkerEven,
