@@ -310,6 +310,12 @@ def test_study_and_robustness_figures(tmp_path) -> None:
     other.write_text(json.dumps({"run": "s", "robustness": [
         {**row, "disturbance": None}, {**row, "disturbance": {"kind": "contact", "value": 20}}]}))
     assert robustness_figure([card, other], tmp_path / "both", dpi=40).is_file()
+    # Cards that count the episodes that finished or stayed up are drawn by that count.
+    row["finished_or_up"] = 3
+    other.write_text(json.dumps({"run": "s", "robustness": [
+        {**row, "disturbance": None}, {**row, "disturbance": {"kind": "slope", "value": -5}}]}))
+    assert robustness_figure(other, tmp_path / "either", dpi=40).is_file()
+    assert robustness_figure([card, other], tmp_path / "mixed", dpi=40).is_file()
     with pytest.raises(ValueError, match="plain.json has no robustness card"):
         (tmp_path / "plain.json").write_text(json.dumps({"run": "r"}))
         robustness_figure([card, tmp_path / "plain.json"], tmp_path / "both")

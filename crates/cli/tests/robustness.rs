@@ -86,6 +86,18 @@ fn perturbed_evaluations_and_the_card() {
         rows[25]["disturbance"],
         serde_json::json!({"kind": "delay", "value": 2})
     );
+    // Each row counts the episodes that finished or stayed up: at least either count, at most
+    // their sum.
+    for row in &rows {
+        let n = |k: &str| row[k].as_u64().unwrap_or_else(|| panic!("{k} in {row}"));
+        let either = n("finished_or_up");
+        assert!(either >= n("survived").max(n("finished")), "{row}");
+        assert!(
+            either <= (n("survived") + n("finished")).min(n("episodes")),
+            "{row}"
+        );
+    }
+    assert!(stdout.contains("| finished or stayed up |"), "{stdout}");
 }
 
 #[test]

@@ -144,10 +144,16 @@ pub struct CardRow {
     pub disturbance: Option<Disturbance>,
     /// Episodes run.
     pub episodes: usize,
-    /// Episodes that did not fall (they finished the track or lasted the whole episode).
+    /// Episodes that did not fall in the whole episode (on a track that goes on past its line,
+    /// `walk.end_at_finish = false`, a fall after the line counts).
     pub survived: usize,
     /// Episodes that reached the end of the track.
     pub finished: usize,
+    /// Episodes that reached the end of the track or did not fall: the robustness goal's
+    /// measure of surviving ("finish or stay up 60 s"). Cards written before it was kept read
+    /// as 0.
+    #[serde(default)]
+    pub finished_or_up: usize,
     /// Mean forward speed, m/s.
     pub speed: f64,
     /// Episodes per gait class.

@@ -229,9 +229,10 @@ def study_figures(study_dir: PathLike, out: PathLike, dpi: int = 150) -> List[Pa
 
 def robustness_figure(eval_json: Union[PathLike, Sequence[PathLike]], out: PathLike,
                       dpi: int = 150) -> Path:
-    """Survival against magnitude per disturbance of an evaluation's robustness card; given
-    several cards (one per policy), their "stayed up" shares side by side, one line each,
-    labelled by the card's run."""
+    """Survival against magnitude per disturbance of an evaluation's robustness card: the
+    shares that stayed up, finished and did either; given several cards (one per policy),
+    their shares that finished or stayed up side by side (those that stayed up, where a card
+    predates that count), one line each, labelled by the card's run."""
     paths = [eval_json] if isinstance(eval_json, (str, Path)) else list(eval_json)
     if not paths:
         raise ValueError("no robustness card given")
@@ -260,6 +261,8 @@ def robustness_figure(eval_json: Union[PathLike, Sequence[PathLike]], out: PathL
             pts.sort(key=lambda p: p[0])
         return kinds
 
+    either = all("finished_or_up" in r for _, rows in cards for r in rows)
+    measure = "finished_or_up" if either else "survived"
     series = [(label, by_kind(rows)) for label, rows in cards]
     names = list(dict.fromkeys(k for _, kinds in series for k in kinds))
     plt = _plt()
@@ -273,13 +276,15 @@ def robustness_figure(eval_json: Union[PathLike, Sequence[PathLike]], out: PathL
             if not pts:
                 continue
             x = [p[0] for p in pts]
-            up = [p[1]["survived"] / p[1]["episodes"] for p in pts]
+            def share(key: str) -> List[float]:
+                return [p[1][key] / p[1]["episodes"] for p in pts]
             if len(series) == 1:
-                ax.plot(x, up, "o-", label="stayed up")
-                ax.plot(x, [p[1]["finished"] / p[1]["episodes"] for p in pts], "s--",
-                        label="finished")
+                ax.plot(x, share("survived"), "o-", label="stayed up")
+                ax.plot(x, share("finished"), "s--", label="finished")
+                if either:
+                    ax.plot(x, share("finished_or_up"), "^:", label="finished or stayed up")
             else:
-                ax.plot(x, up, "o-", label=label)
+                ax.plot(x, share(measure), "o-", label=label)
         ax.set_title(kind, fontsize=9)
         ax.set_xlabel(units.get(kind, ""), fontsize=8)
         ax.set_ylim(-0.05, 1.05)
@@ -289,7 +294,8 @@ def robustness_figure(eval_json: Union[PathLike, Sequence[PathLike]], out: PathL
     axes.flat[0].legend(fontsize=7)
     episodes = cards[0][1][0]["episodes"]
     what = (f"{cards[0][0]}: share of {episodes} episodes" if len(cards) == 1
-            else f"share of {episodes} episodes that stayed up, per policy")
+            else f"share of {episodes} episodes that "
+            f"{'finished or stayed up' if either else 'stayed up'}, per policy")
     fig.suptitle(f"{what}, the undisturbed task at the nominal value", fontsize=9)
     fig.tight_layout()
     return _save(fig, out, "robustness.png", dpi)
