@@ -45,7 +45,8 @@ pub struct TrainOptions {
     /// steps), stopping at the first walk that finishes every check start and starting over
     /// from another seed when a run has not got going; `walking-torque` `walker` without the
     /// stricter stop and the restart; `walking` the recipe on joint-angle targets; `paper` the
-    /// paper's literal §5 protocol.
+    /// paper's literal §5 protocol; `walker-robust` a second stage that trains a walk on
+    /// (`--init RUN/best`) under pushes, ground, body and slope disturbances.
     #[arg(long, value_enum, default_value_t = Preset::WalkerEven)]
     pub preset: Preset,
     /// TOML file overriding the preset (same keys as a run folder's config.toml).

@@ -126,6 +126,12 @@ pub enum Preset {
     /// `results/unseen-starts/mirror-mean-even`.
     #[default]
     WalkerEven,
+    /// A second stage for a walk (`--init RUN/best` of a walking run, required on the
+    /// walking task): `walker-even` trained on for 1.5 M env steps under issue 35's
+    /// disturbances (pushes of 0.5 m/s every 5 s, friction 0.4–1.2, ±20 % mass and strength,
+    /// slopes from −8° to +5°), speed paid only up to 1.1 m/s, the ES from σ = 0.01:
+    /// `results/robustness` ("Six of the default's walks, the stage as a preset").
+    WalkerRobust,
     /// Seconds: tiny budget and networks, for tests.
     Smoke,
 }
@@ -150,7 +156,7 @@ impl EnvKind {
 
 impl Preset {
     /// Every preset.
-    pub const ALL: [Preset; 10] = [
+    pub const ALL: [Preset; 11] = [
         Preset::Paper,
         Preset::Quick,
         Preset::Long,
@@ -160,6 +166,7 @@ impl Preset {
         Preset::WalkerFast,
         Preset::WalkerMirror,
         Preset::WalkerEven,
+        Preset::WalkerRobust,
         Preset::Smoke,
     ];
 
@@ -180,6 +187,7 @@ impl Preset {
             Preset::WalkerFast => "walker-fast",
             Preset::WalkerMirror => "walker-mirror",
             Preset::WalkerEven => "walker-even",
+            Preset::WalkerRobust => "walker-robust",
             Preset::Smoke => "smoke",
         }
     }
@@ -198,6 +206,7 @@ impl Preset {
             Preset::WalkerFast => include_str!("../presets/walker-fast.toml"),
             Preset::WalkerMirror => include_str!("../presets/walker-mirror.toml"),
             Preset::WalkerEven => include_str!("../presets/walker-even.toml"),
+            Preset::WalkerRobust => include_str!("../presets/walker-robust.toml"),
             Preset::Smoke => include_str!("../presets/smoke.toml"),
         }
     }
@@ -419,6 +428,7 @@ impl TrainConfig {
                 | Preset::WalkerFast
                 | Preset::WalkerMirror
                 | Preset::WalkerEven
+                | Preset::WalkerRobust
                 | Preset::WalkingTorque
                 | Preset::Walking
                 | Preset::Paper,
@@ -513,6 +523,14 @@ impl TrainConfig {
             cfg.walk.urdf = Some(u.clone());
         }
         cfg.validate()?;
+        if cfg.preset == Preset::WalkerRobust && cfg.env == EnvKind::Walk && cfg.init.is_none() {
+            bail!(
+                "--preset walker-robust trains a walk on under disturbances: give the walk to \
+                 start from with --init RUN/best (RUN of `esrl train es-sac`, the default; its \
+                 actor and critics); from the first step under these disturbances no seed \
+                 found a walk (results/torque-randomized)"
+            );
+        }
         Ok(cfg)
     }
 

@@ -263,3 +263,55 @@ fn the_default_is_walker_mirror_with_a_margin_of_symmetry_and_a_whole_budget() {
         );
     }
 }
+
+#[test]
+fn walker_robust_is_the_committed_descent_file_over_the_default_from_a_walk() {
+    let file = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../results/robustness/downhill-probes/even-down01-cap11.toml");
+    let walk = PathBuf::from("/runs/even-s2/best");
+    for agent in AgentKind::ALL {
+        // The screens' command: the default, the file, `--steps 1500000 --until budget`.
+        let screened = TrainConfig::resolve(
+            agent,
+            &Overrides {
+                config: Some(file.clone()),
+                steps: Some(1_500_000),
+                stop_at_walk: Some(false),
+                init: Some(walk.clone()),
+                ..options(Preset::WalkerEven, None, None)
+            },
+            Some(2),
+        )
+        .unwrap();
+        let robust = TrainConfig::resolve(
+            agent,
+            &Overrides {
+                init: Some(walk.clone()),
+                ..options(Preset::WalkerRobust, None, None)
+            },
+            Some(2),
+        )
+        .unwrap();
+        assert_eq!(robust.preset, Preset::WalkerRobust);
+        assert_eq!(
+            without_preset_name(&robust),
+            without_preset_name(&screened),
+            "{agent:?}"
+        );
+        assert_eq!(robust.walk.reward.forward_cap, Some(1.1));
+        assert_eq!(robust.walk.perturb.slope_range, Some([-8.0, 5.0]));
+        // The restart rule is judged past the budget: it never fires.
+        assert!(robust.restart.as_ref().unwrap().at_steps > robust.max_env_steps.unwrap());
+        // Without a walk to start from, the walking task is refused by name.
+        let err = TrainConfig::resolve(agent, &options(Preset::WalkerRobust, None, None), Some(2))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("--init RUN/best"), "{err}");
+        // On the pendulum it is the default's (no robot to disturb, no walk needed).
+        assert_eq!(
+            on_pendulum(agent, Preset::WalkerRobust),
+            on_pendulum(agent, Preset::WalkerEven),
+            "{agent:?}"
+        );
+    }
+}
