@@ -3,7 +3,7 @@
 
 use esrl_run::config::{
     TIME_PENDULUM, TIME_QUICK, TIME_WALKER, TIME_WALKER_EVEN, TIME_WALKER_FAST, TIME_WALKER_MIRROR,
-    TIME_WALKING, TIME_WALKING_TORQUE,
+    TIME_WALKER_ROBUST, TIME_WALKING, TIME_WALKING_TORQUE,
 };
 use esrl_run::{AgentKind, EnvKind, Preset, TrainConfig};
 
@@ -14,6 +14,7 @@ fn the_readme_states_the_banner_times() {
     for t in [
         TIME_WALKER_EVEN,
         TIME_WALKER_MIRROR,
+        TIME_WALKER_ROBUST,
         TIME_WALKER,
         TIME_WALKER_FAST,
         TIME_WALKING_TORQUE,
@@ -25,6 +26,8 @@ fn the_readme_states_the_banner_times() {
     }
     let default = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::default());
     assert_eq!(default.typical_time(), Some(TIME_WALKER_EVEN));
+    let robust = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::WalkerRobust);
+    assert_eq!(robust.typical_time(), Some(TIME_WALKER_ROBUST));
     let mirror = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::WalkerMirror);
     assert_eq!(mirror.typical_time(), Some(TIME_WALKER_MIRROR));
     let walker = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::Walker);

@@ -130,7 +130,7 @@ pub enum Preset {
     /// walking task): `walker-even` trained on for 1.5 M env steps under issue 35's
     /// disturbances (pushes of 0.5 m/s every 5 s, friction 0.4–1.2, ±20 % mass and strength,
     /// slopes from −8° to +5°), speed paid only up to 1.1 m/s, the ES from σ = 0.01:
-    /// `results/robustness` ("Six of the default's walks, the stage as a preset").
+    /// `results/robustness` ("Seven of the default's walks, the stage as a preset").
     WalkerRobust,
     /// Seconds: tiny budget and networks, for tests.
     Smoke,
@@ -419,6 +419,7 @@ impl TrainConfig {
             (Preset::WalkerFast, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_WALKER_FAST),
             (Preset::WalkerMirror, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_WALKER_MIRROR),
             (Preset::WalkerEven, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_WALKER_EVEN),
+            (Preset::WalkerRobust, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_WALKER_ROBUST),
             (Preset::WalkingTorque, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_WALKING_TORQUE),
             (Preset::Walking, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_WALKING),
             (Preset::Quick, EnvKind::Walk, AgentKind::EsSac) => Some(TIME_QUICK),
@@ -440,13 +441,17 @@ impl TrainConfig {
     }
 
     /// The settings this config changes from its preset as it comes, as dotted keys (the
-    /// seed, the thread count and `--until` aside, which the preset's measured times cover):
+    /// seed, the thread count and `--until` aside, which the preset's measured times cover,
+    /// and for `walker-robust`, which always starts from a walk, the walk given by `--init`):
     /// empty for the runs [`TrainConfig::typical_time`] was measured on; `max_env_steps`,
     /// `init`, `walk.perturb.slope_range`, … after `--steps`, `--init` or a `--config` file.
     pub fn changed_from_preset(&self) -> Vec<String> {
         let mut preset = Self::preset(self.agent, self.env, self.preset);
         preset.seed = self.seed;
         preset.stop_at_walk = self.stop_at_walk;
+        if self.preset == Preset::WalkerRobust {
+            preset.init = self.init.clone();
+        }
         config_differences(&preset, self)
             .map(|d| {
                 d.into_iter()
@@ -722,6 +727,12 @@ pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-30 min at --thr
 /// the faster rate. The first walks at any speed of the other nine seeds (0.41–1.40 M env
 /// steps) at the two rates give 2–10 min.
 pub const TIME_WALKER_EVEN: &str = "until an even walk within 40 s: 8-23 min at --threads 2 on an idle 2-core machine (median over ten seeds 15-18 min; 17.6 min measured on seed 2, the median of the nine that get there, and 14.6 min for the same run earlier that day), otherwise the whole 4 M env steps, a restart's included: 24-30 min (29.4 min measured on seed 8); the first walk at any speed, kept in RUN/first-walk/, after 2-10 min on nine seeds of ten (7.2 and 6.2 min measured on seed 2; 17.9 min on seed 8, after its restart)";
+/// `--preset walker-robust`'s time (`esrl train es-sac --preset walker-robust --init
+/// RUN/best`, the whole 1.5 M env steps) at `--threads 2` on an idle 2-core Intel Xeon with AMX
+/// (`results/robustness/README.md`, "Seven of the default's walks, the stage as a preset"):
+/// seed 3 from the default's walk, measured: 1,500,089 env steps in 529 s (2,834 env
+/// steps/s), its kept actor byte-identical to the same run's at one thread.
+pub const TIME_WALKER_ROBUST: &str = "the whole 1.5 M env steps: about 9 min at --threads 2 on an idle 2-core machine (8.8 min measured on seed 3)";
 /// `--preset walker-mirror`'s time (`esrl train es-sac --preset walker-mirror`: until the first
 /// walk that reaches the line within 40 s from every check start) at `--threads 2` on an idle
 /// 2-core Intel Xeon with AMX (`results/unseen-starts/README.md`, "The default

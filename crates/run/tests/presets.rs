@@ -89,4 +89,26 @@ fn what_a_run_changes_from_its_preset_is_named() {
         ..Overrides::default()
     });
     assert_eq!(again.changed_from_preset(), Vec::<String>::new());
+
+    // `walker-robust` starts from a walk by design: the walk it is given is its input, as the
+    // seed is, so its measured time holds; its budget changed is still named.
+    let robust = |steps| {
+        resolve(Overrides {
+            preset: Preset::WalkerRobust,
+            init: Some("/runs/even-s3/best".into()),
+            steps,
+            ..Overrides::default()
+        })
+    };
+    assert_eq!(robust(None).changed_from_preset(), Vec::<String>::new());
+    assert_eq!(
+        robust(Some(500_000)).changed_from_preset(),
+        ["max_env_steps"]
+    );
+    // The default given a walk to start from is a fine-tuning run, its time not the preset's.
+    let tuned = resolve(Overrides {
+        init: Some("/runs/even-s3/best".into()),
+        ..Overrides::default()
+    });
+    assert_eq!(tuned.changed_from_preset(), ["init"]);
 }
