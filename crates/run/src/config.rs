@@ -130,7 +130,7 @@ pub enum Preset {
     /// walking task): `walker-even` trained on for 1.5 M env steps under issue 35's
     /// disturbances (pushes of 0.5 m/s every 5 s, friction 0.4–1.2, ±20 % mass and strength,
     /// slopes from −8° to +5°), speed paid only up to 1.1 m/s, the ES from σ = 0.01:
-    /// `results/robustness` ("Seven of the default's walks, the stage as a preset").
+    /// `results/robustness` ("Eight of the default's walks, the stage as a preset").
     WalkerRobust,
     /// Seconds: tiny budget and networks, for tests.
     Smoke,
@@ -729,7 +729,7 @@ pub const TIME_WALKER_FAST: &str = "until a walk within 40 s: 13-30 min at --thr
 pub const TIME_WALKER_EVEN: &str = "until an even walk within 40 s: 8-23 min at --threads 2 on an idle 2-core machine (median over ten seeds 15-18 min; 17.6 min measured on seed 2, the median of the nine that get there, and 14.6 min for the same run earlier that day), otherwise the whole 4 M env steps, a restart's included: 24-30 min (29.4 min measured on seed 8); the first walk at any speed, kept in RUN/first-walk/, after 2-10 min on nine seeds of ten (7.2 and 6.2 min measured on seed 2; 17.9 min on seed 8, after its restart)";
 /// `--preset walker-robust`'s time (`esrl train es-sac --preset walker-robust --init
 /// RUN/best`, the whole 1.5 M env steps) at `--threads 2` on an idle 2-core Intel Xeon with AMX
-/// (`results/robustness/README.md`, "Seven of the default's walks, the stage as a preset"):
+/// (`results/robustness/README.md`, "Eight of the default's walks, the stage as a preset"):
 /// seed 3 from the default's walk, measured: 1,500,089 env steps in 529 s (2,834 env
 /// steps/s), its kept actor byte-identical to the same run's at one thread.
 pub const TIME_WALKER_ROBUST: &str = "the whole 1.5 M env steps: about 9 min at --threads 2 on an idle 2-core machine (8.8 min measured on seed 3)";
