@@ -262,7 +262,12 @@ def robustness_figure(eval_json: Union[PathLike, Sequence[PathLike]], out: PathL
         return kinds
 
     either = all("finished_or_up" in r for _, rows in cards for r in rows)
-    measure = "finished_or_up" if either else "survived"
+    measure, measured = (("finished_or_up", "finished or stayed up") if either
+                         else ("survived", "stayed up"))
+
+    def share(pts: List[Any], key: str) -> List[float]:
+        return [p[1][key] / p[1]["episodes"] for p in pts]
+
     series = [(label, by_kind(rows)) for label, rows in cards]
     names = list(dict.fromkeys(k for _, kinds in series for k in kinds))
     plt = _plt()
@@ -276,15 +281,13 @@ def robustness_figure(eval_json: Union[PathLike, Sequence[PathLike]], out: PathL
             if not pts:
                 continue
             x = [p[0] for p in pts]
-            def share(key: str) -> List[float]:
-                return [p[1][key] / p[1]["episodes"] for p in pts]
             if len(series) == 1:
-                ax.plot(x, share("survived"), "o-", label="stayed up")
-                ax.plot(x, share("finished"), "s--", label="finished")
+                ax.plot(x, share(pts, "survived"), "o-", label="stayed up")
+                ax.plot(x, share(pts, "finished"), "s--", label="finished")
                 if either:
-                    ax.plot(x, share("finished_or_up"), "^:", label="finished or stayed up")
+                    ax.plot(x, share(pts, "finished_or_up"), "^:", label="finished or stayed up")
             else:
-                ax.plot(x, share(measure), "o-", label=label)
+                ax.plot(x, share(pts, measure), "o-", label=label)
         ax.set_title(kind, fontsize=9)
         ax.set_xlabel(units.get(kind, ""), fontsize=8)
         ax.set_ylim(-0.05, 1.05)
@@ -294,8 +297,7 @@ def robustness_figure(eval_json: Union[PathLike, Sequence[PathLike]], out: PathL
     axes.flat[0].legend(fontsize=7)
     episodes = cards[0][1][0]["episodes"]
     what = (f"{cards[0][0]}: share of {episodes} episodes" if len(cards) == 1
-            else f"share of {episodes} episodes that "
-            f"{'finished or stayed up' if either else 'stayed up'}, per policy")
+            else f"share of {episodes} episodes that {measured}, per policy")
     fig.suptitle(f"{what}, the undisturbed task at the nominal value", fontsize=9)
     fig.tight_layout()
     return _save(fig, out, "robustness.png", dpi)

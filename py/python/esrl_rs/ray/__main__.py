@@ -20,8 +20,8 @@ from typing import Any, Callable, Dict, List, Optional, TypeVar
 T = TypeVar("T")
 
 AGENTS = ["es-sac", "es-td3", "es-ddpg", "sac", "td3", "ddpg"]
-PRESETS = ["paper", "quick", "long", "walking", "walking-torque", "walker", "walker-fast", "walker-mirror", "walker-even", "walker-robust",
-           "smoke"]
+PRESETS = ["paper", "quick", "long", "walking", "walking-torque", "walker", "walker-fast",
+           "walker-mirror", "walker-even", "walker-robust", "smoke"]
 ENVS = ["walk", "pendulum"]
 
 
