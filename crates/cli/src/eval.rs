@@ -4,8 +4,8 @@
 use crate::args::{EnvKind, EvalArgs};
 use anyhow::{bail, Result};
 use esrl_eval::{
-    card, card_markdown, eval_path, evaluate_with, load_run_pick, standard_set, Disturbance,
-    EvalOptions, EvalReport, LoadedRun, Pick,
+    card, card_markdown, eval_path, evaluate_with, goal_markdown, goal_rows, load_run_pick,
+    standard_set, Disturbance, EvalOptions, EvalReport, LoadedRun, Pick,
 };
 use esrl_metrics::{format_number, gait_classes_text, GaitCycle, GaitMetrics, JointMotion};
 use esrl_run::checkpoint::{BestInfo, BEST_INFO};
@@ -103,8 +103,10 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             &standard_set(),
             Some(&stop),
         )?;
-        println!("{}", card_markdown(&rows));
+        let goal = goal_rows(&rows);
+        println!("{}\n{}\n", card_markdown(&rows), goal_markdown(&goal));
         report.robustness = Some(rows);
+        report.robustness_goal = Some(goal);
     }
     if report.episodes.len() < report.requested {
         eprintln!(
@@ -169,6 +171,12 @@ pub fn which_policy(loaded: &LoadedRun) -> String {
             } else {
                 ""
             };
+            if b.start {
+                return format!(
+                    "{dir}: the kept policy is the one the run started from (`init`): none it \
+                     trained ranked above it, {how}{other}"
+                );
+            }
             format!(
                 "{dir}: {what} of {unit} {}{mean} ({} env steps), {how}{other}",
                 b.generation, b.env_steps

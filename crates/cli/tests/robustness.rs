@@ -98,6 +98,17 @@ fn perturbed_evaluations_and_the_card() {
         );
     }
     assert!(stdout.contains("| finished or stayed up |"), "{stdout}");
+    // Under the table, the robustness goal's rows met and missed, kept in the report.
+    let goal = &read_json(&card)["robustness_goal"];
+    let (met, rows) = (
+        goal["met"].as_u64().unwrap(),
+        goal["rows"].as_u64().unwrap(),
+    );
+    assert_eq!(rows, 12, "{goal}");
+    assert!(
+        stdout.contains(&format!("{met} of 12 rows met")),
+        "{stdout}"
+    );
 }
 
 #[test]

@@ -488,3 +488,65 @@ seeds = [5]
         "{report}"
     );
 }
+
+/// `[eval] robustness_episodes = n` puts each handed-over policy's robustness card in its
+/// record, with the goal rows it meets, and the report counts the runs meeting them; an arm
+/// that does not walk is refused before anything trains.
+#[test]
+fn a_study_may_card_each_policy_and_report_the_robustness_goal() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = r#"
+seeds = [0]
+[eval]
+episodes = 1
+robustness_episodes = 1
+[[arm]]
+name = "carded"
+agent = "es-sac"
+preset = "smoke"
+generations = 1
+"#;
+    let (study, out) = run_own_study(tmp.path(), text);
+    let eval = read_json(&out.join("records/carded-s0/eval.json"));
+    let card = eval["robustness"].as_array().unwrap();
+    assert_eq!(
+        card.len(),
+        1 + 25,
+        "the undisturbed task and 25 disturbances"
+    );
+    assert!(card.iter().all(|r| r["episodes"] == 1), "{card:?}");
+    let goal = &eval["robustness_goal"];
+    let (rows, met) = (
+        goal["rows"].as_u64().unwrap(),
+        goal["met"].as_u64().unwrap(),
+    );
+    assert_eq!(rows, 12, "{goal}");
+    assert_eq!(
+        met + goal["missed"].as_array().unwrap().len() as u64,
+        rows,
+        "{goal}"
+    );
+    ok(&["study", "report", out.to_str().unwrap()]);
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("## Robustness goal"), "{md}");
+    assert!(md.contains(&format!("| carded-s0 | {met} of 12 |")), "{md}");
+    let figures = read_json(&out.join("report.json"));
+    assert_eq!(figures["robustness"]["arms"][0]["runs"], 1, "{figures}");
+
+    std::fs::write(
+        &study,
+        text.replace(
+            "preset = \"smoke\"",
+            "preset = \"smoke\"\nset = { env = \"pendulum\" }",
+        ),
+    )
+    .unwrap();
+    let err = fails(&[
+        "study",
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        tmp.path().join("pendulum").to_str().unwrap(),
+    ]);
+    assert!(err.contains("robustness_episodes"), "{err}");
+}

@@ -62,6 +62,12 @@ impl Disturbance {
         }
     }
 
+    /// "push_sagittal 0.5 m/s": its name, magnitude and unit, for tables.
+    pub fn label(self) -> String {
+        let (v, unit) = self.magnitude();
+        format!("{} {v} {unit}", self.name())
+    }
+
     /// Parses `KIND=VALUE` (`push_sagittal=0.5`, `friction=0.4`, `slope=-5`, `delay=1`).
     pub fn parse(text: &str) -> Result<Self> {
         let Some((kind, value)) = text.split_once('=') else {
@@ -163,13 +169,8 @@ pub struct CardRow {
 impl CardRow {
     /// "push_sagittal 0.5 m/s" (or "none").
     pub fn label(&self) -> String {
-        match self.disturbance {
-            None => "none".into(),
-            Some(d) => {
-                let (v, unit) = d.magnitude();
-                format!("{} {v} {unit}", d.name())
-            }
-        }
+        self.disturbance
+            .map_or_else(|| "none".into(), Disturbance::label)
     }
 }
 

@@ -41,5 +41,8 @@ pub use report::{
     eval_path, evaluate, evaluate_and_write, evaluate_with, mean_gait, EpisodeEval, EvalMean,
     EvalOptions, EvalReport, Trace, EVAL_FILE,
 };
-pub use robustness::{card, card_markdown, standard_set};
+pub use robustness::{
+    card, card_markdown, goal_markdown, goal_rows, goal_set, standard_set, GoalMiss, GoalRows,
+    GOAL_SHARE,
+};
 pub use stick::{animated_svg, render_rgb, StickFigure, StickRecorder, DEFAULT_INTERVAL};

@@ -248,6 +248,10 @@ pub struct EvalReport {
     /// the standard set.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robustness: Option<Vec<crate::disturbance::CardRow>>,
+    /// Which rows of the robustness goal the card meets ([`crate::robustness::goal_rows`]),
+    /// beside the card.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robustness_goal: Option<crate::robustness::GoalRows>,
 }
 
 /// Evaluates `loaded` on `episodes` deterministic episodes with seeds `seed, seed + 1, …`
@@ -346,6 +350,7 @@ pub fn evaluate_with(
         default_starts: false,
         orientation_frame: loaded.config.walk.orientation_frame,
         robustness: None,
+        robustness_goal: None,
     })
 }
 

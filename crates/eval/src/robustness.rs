@@ -10,12 +10,19 @@
 //! goes on past its line, a fall after the line counts), the share that reach the line, the
 //! share that do either (the line or 60 s without a fall: the robustness goal's measure of
 //! surviving), and the gait.
+//!
+//! **The robustness goal** ([`goal_set`], [`goal_rows`]): pushes of 0.5 m/s every 5 s each
+//! way, ground friction 0.4–1.2, ±20 % mass and motor strength and ±5° slopes, each row
+//! finished or stayed up in at least 9 of 10 episodes ([`GOAL_SHARE`]). The card says which
+//! of these rows a policy meets and which it misses; a study with `[eval] robustness` counts
+//! the runs that meet each, and all of them, with intervals.
 
 use crate::disturbance::{CardRow, Disturbance};
 use crate::load::LoadedRun;
 use crate::report::{evaluate_with, EvalOptions};
 use esrl_metrics::{gait_classes_text, GaitClass};
 use esrl_run::{bail, Result};
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// The robustness card's disturbances: pushes of 0.25–1 m/s every 5 s each way, friction
@@ -42,6 +49,114 @@ pub fn standard_set() -> Vec<Disturbance> {
     }
     set.extend([Delay(1), Delay(2)]);
     set
+}
+
+/// The robustness goal's disturbances, all on the card ([`standard_set`]): pushes of 0.5 m/s
+/// every 5 s each way, ground friction 0.4, 0.6, 0.8 and 1.2, mass and strength × 0.8 and
+/// × 1.2, and slopes of −5° and +5°.
+pub fn goal_set() -> Vec<Disturbance> {
+    use Disturbance::*;
+    vec![
+        PushSagittal(0.5),
+        PushLateral(0.5),
+        Friction(0.4),
+        Friction(0.6),
+        Friction(0.8),
+        Friction(1.2),
+        Mass(0.8),
+        Mass(1.2),
+        Strength(0.8),
+        Strength(1.2),
+        Slope(-5.0),
+        Slope(5.0),
+    ]
+}
+
+/// The share of a goal row's episodes that must finish or stay up, as (numerator,
+/// denominator): 9 of 10.
+pub const GOAL_SHARE: (usize, usize) = (9, 10);
+
+/// Which of the robustness goal's rows a card meets.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GoalRows {
+    /// Goal disturbances the card has a row for (12 on a card of the standard set).
+    pub rows: usize,
+    /// Of them, the rows whose episodes finished or stayed up in at least [`GOAL_SHARE`].
+    pub met: usize,
+    /// The rows missed, in the goal's order.
+    pub missed: Vec<GoalMiss>,
+    /// Goal disturbances the card has no row for (a card of another set).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub absent: Vec<String>,
+}
+
+/// A goal row a card misses.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct GoalMiss {
+    /// The row's label (`"slope -5 °"`, [`Disturbance::label`]).
+    pub row: String,
+    /// Its episodes that finished or stayed up.
+    pub up: usize,
+    /// Its episodes.
+    pub episodes: usize,
+}
+
+impl std::fmt::Display for GoalMiss {
+    /// `slope -5 °: 7/10`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}: {}/{}", self.row, self.up, self.episodes)
+    }
+}
+
+/// Which of [`goal_set`]'s rows `card` meets. A row counts its episodes that finished or
+/// stayed up (for a card written before that count was kept, the larger of the two, a
+/// lower bound).
+pub fn goal_rows(card: &[CardRow]) -> GoalRows {
+    let (num, den) = GOAL_SHARE;
+    let mut goal = GoalRows {
+        rows: 0,
+        met: 0,
+        missed: Vec::new(),
+        absent: Vec::new(),
+    };
+    for d in goal_set() {
+        let Some(row) = card.iter().find(|r| r.disturbance == Some(d)) else {
+            goal.absent.push(d.label());
+            continue;
+        };
+        goal.rows += 1;
+        let up = row.finished_or_up.max(row.survived).max(row.finished);
+        if row.episodes > 0 && den * up >= num * row.episodes {
+            goal.met += 1;
+        } else {
+            goal.missed.push(GoalMiss {
+                row: row.label(),
+                up,
+                episodes: row.episodes,
+            });
+        }
+    }
+    goal
+}
+
+/// "Robustness goal: 10 of 12 rows met (…); missed: …".
+pub fn goal_markdown(goal: &GoalRows) -> String {
+    let (num, den) = GOAL_SHARE;
+    let mut text = format!(
+        "Robustness goal (pushes 0.5 m/s each way, friction 0.4–1.2, mass and strength ±20 %, \
+         slopes ±5°; a row is met when at least {num} of {den} episodes finish or stay up): {} \
+         of {} rows met",
+        goal.met, goal.rows
+    );
+    if !goal.missed.is_empty() {
+        let missed: Vec<String> = goal.missed.iter().map(GoalMiss::to_string).collect();
+        text.push_str(&format!("; missed: {}", missed.join(", ")));
+    }
+    if !goal.absent.is_empty() {
+        text.push_str(&format!("; not on this card: {}", goal.absent.join(", ")));
+    }
+    text.push('.');
+    text
 }
 
 /// Evaluates `loaded` undisturbed and under each of `set`, `episodes` deterministic episodes
@@ -149,5 +264,58 @@ mod tests {
         let episodes = [(false, true), (true, true), (true, false), (false, false)];
         assert_eq!(survival_counts(episodes.into_iter()), (2, 2, 3));
         assert_eq!(survival_counts(std::iter::empty()), (0, 0, 0));
+    }
+
+    /// A card row of `d` with `up` of `episodes` finished or stayed up.
+    fn row(d: Disturbance, up: usize, episodes: usize) -> CardRow {
+        CardRow {
+            disturbance: Some(d),
+            episodes,
+            survived: up,
+            finished: 0,
+            finished_or_up: up,
+            speed: 1.0,
+            classes: BTreeMap::new(),
+        }
+    }
+
+    #[test]
+    fn a_goal_row_is_met_at_nine_of_ten_and_missed_rows_are_named() {
+        let mut card: Vec<CardRow> = goal_set().into_iter().map(|d| row(d, 10, 10)).collect();
+        card[1] = row(Disturbance::PushLateral(0.5), 0, 10);
+        card[10] = row(Disturbance::Slope(-5.0), 8, 10);
+        card[11] = row(Disturbance::Slope(5.0), 9, 10);
+        // Rows off the goal change nothing.
+        card.push(row(Disturbance::PushSagittal(1.0), 0, 10));
+        let goal = goal_rows(&card);
+        assert_eq!((goal.rows, goal.met), (12, 10));
+        let missed: Vec<String> = goal.missed.iter().map(GoalMiss::to_string).collect();
+        assert_eq!(missed, ["push_lateral 0.5 m/s: 0/10", "slope -5 °: 8/10"]);
+        assert!(goal.absent.is_empty());
+        // 18 of 20 meets the share, 17 of 20 does not.
+        card[10] = row(Disturbance::Slope(-5.0), 18, 20);
+        assert_eq!(goal_rows(&card).met, 11);
+        card[10] = row(Disturbance::Slope(-5.0), 17, 20);
+        assert_eq!(goal_rows(&card).met, 10);
+        let text = goal_markdown(&goal);
+        assert!(text.contains("10 of 12 rows met"), "{text}");
+        assert!(
+            text.contains("missed: push_lateral 0.5 m/s: 0/10"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn a_card_without_the_goal_rows_names_them_and_an_old_card_counts_a_lower_bound() {
+        let goal = goal_rows(&[row(Disturbance::Friction(0.4), 10, 10)]);
+        assert_eq!((goal.rows, goal.met, goal.absent.len()), (1, 1, 11));
+        assert!(goal_markdown(&goal).contains("not on this card: push_sagittal 0.5 m/s"));
+        // A card written before `finished_or_up` was kept reads it as 0: the larger of
+        // stayed up and finished stands in for it.
+        let mut old = row(Disturbance::Mass(1.2), 0, 10);
+        (old.survived, old.finished) = (7, 9);
+        assert_eq!(goal_rows(&[old]).met, 1);
+        // No episodes meet no goal.
+        assert_eq!(goal_rows(&[row(Disturbance::Mass(0.8), 0, 0)]).met, 0);
     }
 }

@@ -64,6 +64,16 @@
 //! every [`CheckConfig::every_steps`] environment steps, the policy of the latest row (so a
 //! walk that appears after an early high score is still seen).
 //!
+//! **The policy a run starts from.** A run started from a trained policy (`init`: fine-tuning,
+//! `--preset walker-robust`) checks that policy too, beside its first row (`"trigger":
+//! "start"`, row 0, 0 env steps), as a candidate for `RUN/best/` only: a policy the run
+//! trained must rank above it to be kept, so the run never hands back one its own check
+//! ranks below its start (the stage under disturbances on seed 8 of the default kept an
+//! early, worse policy when none it trained finished a disturbed start;
+//! `results/robustness/README.md`). The start is not the run's first walk (a start at the
+//! bar neither stops the run nor times a walk) and its distance does not settle the
+//! `[restart]` rule; `best.json` of a kept start says `"start": true`.
+//!
 //! **Stopping early** ([`CheckConfig::stop_early`], off by default). Most checks are of
 //! policies far from the bar, and a policy that must finish every start is out of reach at
 //! its first start that does not. With `stop_early`, a check stops at the start, in start
@@ -894,6 +904,9 @@ pub enum Trigger {
     Periodic,
     /// Both at once.
     Both,
+    /// The policy the run started from (`init`), checked beside the first row: a candidate
+    /// for `RUN/best/` only ([`crate::check`] module docs, "The policy a run starts from").
+    Start,
 }
 
 /// One line of `RUN/checks.jsonl`: which policy was checked, when, why, what the check found

@@ -316,6 +316,11 @@ pub struct BestInfo {
     /// individual. Absent when false.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub mean: bool,
+    /// Whether the policy is the one the run started from (`init`), kept because no policy
+    /// the run trained ranked above it on the walking check (then `generation`, `fitness`
+    /// and `env_steps` are 0). Absent when false.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub start: bool,
     /// What the walking check found for it, when the run chooses `best/` by the check
     /// (`[check]`; then `fitness` is its row's curve value, not necessarily the highest).
     #[serde(default, skip_serializing_if = "Option::is_none")]

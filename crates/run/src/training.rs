@@ -11,7 +11,7 @@ use crate::error::{Context, Error, Result};
 use crate::restart::{self, Restart};
 use crate::run_dir::{append_jsonl, truncate_jsonl, write_atomic, RunDir};
 use crate::summary::Summary;
-use esrl_agents::{AgentError, Learner, Row};
+use esrl_agents::{Agent, AgentError, Learner, Row};
 use esrl_metrics::CurveSummary;
 use esrl_sim::MakeEnv;
 use serde_json::{Map, Value};
@@ -298,26 +298,52 @@ impl<L: Learner> Training<L> {
             truncate_jsonl(&root.join(CHECKS_FILE), state.records)?;
         }
         let started = Instant::now();
+        let start = Self::start_policy(cfg, &state, checker.as_ref(), &learner);
         learner.prepare(envs.as_ref())?;
         let wall0 = state.wall_s;
-        Ok((
-            Self {
-                cfg: cfg.clone(),
-                root: root.to_path_buf(),
-                learner,
-                envs,
-                run,
-                state,
-                pool,
-                started,
-                wall0,
-                checker,
-                _lock: lock,
-                due: None,
-                attempt,
-            },
-            opening,
-        ))
+        let mut training = Self {
+            cfg: cfg.clone(),
+            root: root.to_path_buf(),
+            learner,
+            envs,
+            run,
+            state,
+            pool,
+            started,
+            wall0,
+            checker,
+            _lock: lock,
+            due: None,
+            attempt,
+        };
+        training.due = start.map(|agent| training.start_due(agent));
+        Ok((training, opening))
+    }
+
+    /// The policy a fresh run started from (`init`) with a walking check: checked beside the
+    /// first row ([`crate::check`] module docs, "The policy a run starts from").
+    fn start_policy(
+        cfg: &TrainConfig,
+        state: &RunState,
+        checker: Option<&Checker>,
+        learner: &L,
+    ) -> Option<Agent> {
+        (cfg.init.is_some() && checker.is_some() && state.rows == 0)
+            .then(|| learner.agent().clone())
+    }
+
+    /// The check of the start policy `agent`, due beside the first row.
+    fn start_due(&self, agent: Agent) -> Due {
+        Due {
+            candidates: vec![Candidate { agent, mean: false }],
+            row: 0,
+            env_steps: 0,
+            curve: 0.0,
+            trigger: Trigger::Start,
+            may_stop: self.restart_settled(),
+            kept: None,
+            seeking: false,
+        }
     }
 
     /// The walking check of `cfg`, its starts drawn from `seed`, for runs that check.
@@ -407,11 +433,13 @@ impl<L: Learner> Training<L> {
             self.state.check = Some(CheckState::default());
             truncate_jsonl(&self.root.join(CHECKS_FILE), 0)?;
         }
+        let start = Self::start_policy(&self.cfg, &self.state, self.checker.as_ref(), &learner);
         self.learner = learner;
         self.attempt = attempt;
         self.started = Instant::now();
         self.wall0 = 0.0;
         self.learner.prepare(self.envs.as_ref())?;
+        self.due = start.map(|agent| self.start_due(agent));
         Ok(())
     }
 
@@ -535,6 +563,7 @@ impl<L: Learner> Training<L> {
                             fitness: curve,
                             env_steps: self.learner.env_steps(),
                             mean: false,
+                            start: false,
                             check: None,
                         };
                         checkpoint::save_best(&self.root, &self.cfg, &agent, &info)?;
@@ -648,12 +677,17 @@ impl<L: Learner> Training<L> {
             seconds,
         } = checked;
         let wall_s = self.wall_s();
+        // The policy the run started from competes for `RUN/best/` only (module docs of
+        // `check`, "The policy a run starts from").
+        let start = due.trigger == Trigger::Start;
         let state = self.state.check.get_or_insert_with(CheckState::default);
         let kept = state.kept.as_ref().is_none_or(|k| result.beats(&k.result));
         state.seconds += seconds;
         state.env_steps += result.check_steps;
-        let d = result.mean_distance;
-        state.best_distance = Some(state.best_distance.map_or(d, |b| b.max(d)));
+        if !start {
+            let d = result.mean_distance;
+            state.best_distance = Some(state.best_distance.map_or(d, |b| b.max(d)));
+        }
         let record = CheckRecord {
             row: due.row,
             env_steps: due.env_steps,
@@ -669,13 +703,14 @@ impl<L: Learner> Training<L> {
             fitness: due.curve,
             env_steps: due.env_steps,
             mean: candidate.mean,
+            start,
             check: Some(record.result.clone()),
         };
         if kept {
             checkpoint::save_best(&self.root, &self.cfg, &candidate.agent, &info())?;
             state.kept = Some(record.clone());
         }
-        if record.result.at_bar && state.first_walk.is_none() {
+        if record.result.at_bar && state.first_walk.is_none() && !start {
             state.first_walk = Some(record.clone());
         }
         let walking = record.result.walking.unwrap_or(false) || record.result.at_bar;

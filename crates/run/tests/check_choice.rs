@@ -7,7 +7,7 @@
 use esrl_agents::{
     Agent, AgentError, EpisodeReport, Learner, ReplayBuffer, Resumable, Trainer, TrainerState,
 };
-use esrl_run::check::{CheckConfig, CheckRecord};
+use esrl_run::check::{CheckConfig, CheckRecord, Trigger};
 use esrl_run::checkpoint::{self, BestInfo, BEST, BEST_INFO};
 use esrl_run::restart::RestartConfig;
 use esrl_run::training::CHECKS_FILE;
@@ -159,8 +159,37 @@ fn train_scripted(
     rows: Vec<(f64, Vec<f32>)>,
     mean: Option<Vec<f32>>,
 ) -> (BestInfo, Vec<CheckRecord>, Vec<f32>) {
+    let run = run_scripted(cfg, rows, mean, None);
+    (run.best, run.records, run.kept)
+}
+
+/// What a scripted run left.
+struct ScriptedRun {
+    best: BestInfo,
+    records: Vec<CheckRecord>,
+    /// `checks.jsonl` as written.
+    log: String,
+    /// The genome `RUN/best/` holds.
+    kept: Vec<f32>,
+    /// [`Training::best_distance`] at the end.
+    distance: Option<f64>,
+    /// Whether the run found a first walk.
+    walked: bool,
+}
+
+/// [`train_scripted`], the learner's agent holding `start` before the first row when given
+/// (the policy a run with `init` starts from).
+fn run_scripted(
+    cfg: TrainConfig,
+    rows: Vec<(f64, Vec<f32>)>,
+    mean: Option<Vec<f32>>,
+    start: Option<&[f32]>,
+) -> ScriptedRun {
     let envs = build::envs(cfg.env, &cfg.walk).unwrap();
-    let agent = build::agent(&cfg, &envs).unwrap();
+    let mut agent = build::agent(&cfg, &envs).unwrap();
+    if let Some(genome) = start {
+        agent.set_genome(genome).unwrap();
+    }
     let learner = Scripted {
         inner: Trainer::new(agent, cfg.seed),
         rows,
@@ -185,7 +214,14 @@ fn train_scripted(
         .collect();
     let mut kept = build::agent(&cfg, &envs).unwrap();
     checkpoint::load_agent(&root.join(BEST), &mut kept).unwrap();
-    (best, records, kept.genome())
+    ScriptedRun {
+        best,
+        records,
+        log,
+        kept: kept.genome(),
+        distance: t.best_distance(),
+        walked: t.first_walk().is_some(),
+    }
 }
 
 #[test]
@@ -337,4 +373,58 @@ fn the_es_mean_is_checked_first_and_kept_over_individuals_that_do_not_beat_it() 
     );
     assert!(!best.mean && best.generation == 0);
     assert_eq!(kept, stands);
+}
+
+/// Contract (`init`): a run started from a trained policy checks that policy beside its
+/// first row, as a candidate for `RUN/best/` only. Here it stands and every policy the run
+/// trains falls: the start is kept (`best.json` says so), and its check neither times a
+/// walk nor counts for the restart rule's distance. Without `init` nothing more is checked.
+#[test]
+fn a_run_started_from_a_policy_keeps_it_until_a_trained_one_ranks_above_it() {
+    let mut cfg = config(true);
+    cfg.init = Some("the-start".into());
+    let (stands, falls) = genomes(&cfg);
+    let rows = vec![(1.0, falls.clone()), (5.0, falls.clone())];
+    let run = run_scripted(cfg.clone(), rows, None, Some(&stands));
+    let (records, best) = (&run.records, &run.best);
+    assert_eq!(records.len(), 3, "the start and both rows");
+    assert_eq!(records[0].trigger, Trigger::Start);
+    assert_eq!((records[0].row, records[0].env_steps), (0, 0));
+    assert!(
+        run.log
+            .lines()
+            .next()
+            .unwrap()
+            .contains("\"trigger\":\"start\""),
+        "{}",
+        run.log
+    );
+    assert!(records[1].result.falls > records[0].result.falls);
+    assert_eq!(
+        records.iter().map(|r| r.kept).collect::<Vec<_>>(),
+        [true, false, false]
+    );
+    assert!(
+        best.start && best.generation == 0 && best.env_steps == 0,
+        "{best:?}"
+    );
+    assert_eq!(best.check.as_ref(), Some(&records[0].result));
+    assert_eq!(run.kept, stands, "RUN/best/ holds the start");
+    let trained = records[1..]
+        .iter()
+        .map(|r| r.result.mean_distance)
+        .fold(f64::NEG_INFINITY, f64::max);
+    // (checks.jsonl's numbers are read back from JSON: equal to the last digit or so.)
+    let read = run.distance.expect("the trained checks' distance");
+    assert!(
+        (read - trained).abs() < 1e-12 && (read - records[0].result.mean_distance).abs() > 1e-3,
+        "the restart rule reads the trained checks' {trained} m, not the start's: {read}"
+    );
+    assert!(!run.walked);
+
+    // The same rows without `init`: two checks, the first row's policy kept.
+    cfg.init = None;
+    let (best, records) = train_with(cfg);
+    assert_eq!(records.len(), 2);
+    assert!(!best.start && records.iter().all(|r| r.trigger != Trigger::Start));
 }

@@ -13,6 +13,8 @@
 //! undisturbed = false             # true: on the plain task, without [walk.perturb]
 //! default_starts = false          # true: from the task's standard starts (walk.init_noise,
 //!                                 # walk.reset at their defaults), for runs trained from others
+//! robustness_episodes = 0         # n > 0: also the robustness card, n episodes per row
+//!                                 # (reset seeds 1000…), and the robustness goal's rows met
 //!
 //! [[arm]]
 //! name = "default"
@@ -157,6 +159,16 @@ pub struct StudyEval {
     /// Default false: each run's own starts.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub default_starts: bool,
+    /// Episodes per row of the robustness card (`esrl eval --robustness`, from the same reset
+    /// seeds; walking runs), kept in the record's `eval.json` with the robustness goal's rows
+    /// met; the report counts the runs that meet each goal row. Default 0: no card (a card of
+    /// 26 rows × 10 episodes is about 260 walking episodes a run).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub robustness_episodes: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 impl Default for StudyEval {
@@ -168,6 +180,7 @@ impl Default for StudyEval {
             traces: 1,
             undisturbed: false,
             default_starts: false,
+            robustness_episodes: 0,
         }
     }
 }
@@ -309,6 +322,14 @@ impl Study {
                         PathBuf::from(init.to_string_lossy().replace("{seed}", &seed.to_string()));
                     let path = base.join(named);
                     *init = std::path::absolute(&path).unwrap_or(path);
+                }
+                if self.file.eval.robustness_episodes > 0 && cfg.env != esrl_run::EnvKind::Walk {
+                    bail!(
+                        "arm `{}`: eval.robustness_episodes asks for the robustness card, which is \
+                         for walking runs (this arm trains on {:?})",
+                        arm.name,
+                        cfg.env
+                    );
                 }
                 runs.push((i, seed, cfg));
             }

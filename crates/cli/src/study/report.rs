@@ -3,7 +3,7 @@
 
 use super::{held_study, read_eval, Handover, Study, StudyEval};
 use anyhow::{bail, Context, Result};
-use esrl_eval::EvalReport;
+use esrl_eval::{goal_rows, goal_set, Disturbance, EvalReport, GoalRows, GOAL_SHARE};
 use esrl_metrics::{
     actuator_markdown, bootstrap, gait_classes_text, iqm_interval, joint_markdown, mean_sd,
     probability_of_improvement_interval, summarize_method, table1, table1_markdown, wilson,
@@ -180,8 +180,23 @@ pub(crate) fn report(dir: &Path, json_out: bool) -> Result<()> {
     md.push_str(&poi_md);
     let (runs_md, csv) = every_run(&rows);
     md.push_str(&runs_md);
+    let carded: Vec<CardedRun> = records
+        .iter()
+        .filter_map(|r| {
+            Some(CardedRun {
+                arm: study.file.arms[r.arm].name.clone(),
+                seed: r.seed,
+                goal: goal_rows(r.eval.robustness.as_ref()?),
+            })
+        })
+        .collect();
+    let (robust_md, robust_json) = robustness_section(&study, &carded)?;
+    md.push_str(&robust_md);
     md.push_str(&table1_section(&study, &records)?);
-    let figures = json!({"arms": arms_json, "improvement": poi_json, "runs": rows});
+    let mut figures = json!({"arms": arms_json, "improvement": poi_json, "runs": rows});
+    if !carded.is_empty() {
+        figures["robustness"] = json!({"arms": robust_json, "runs": carded});
+    }
     write_atomic(&dir.join("report.md"), md.as_bytes())?;
     write_atomic(&dir.join("report.csv"), csv.as_bytes())?;
     write_json_atomic(&dir.join("report.json"), &figures)?;
@@ -363,6 +378,110 @@ fn per_arm(study: &Study, rows: &[RunRow]) -> Result<(String, Vec<Value>)> {
         }));
     }
     Ok((md, arms_json))
+}
+
+/// A run whose record holds a robustness card, and the goal rows it meets.
+#[derive(Debug, Clone, Serialize)]
+struct CardedRun {
+    arm: String,
+    seed: u64,
+    goal: GoalRows,
+}
+
+/// "Robustness goal": per arm the runs whose card meets every goal row, and every one but
+/// one, with Wilson intervals; per goal row the runs that meet it; each run's rows met and
+/// missed. Nothing when no record has a card (`[eval] robustness_episodes`).
+fn robustness_section(study: &Study, carded: &[CardedRun]) -> Result<(String, Vec<Value>)> {
+    let mut json_arms = Vec::new();
+    if carded.is_empty() {
+        return Ok((String::new(), json_arms));
+    }
+    let (num, den) = GOAL_SHARE;
+    let labels: Vec<String> = goal_set().into_iter().map(Disturbance::label).collect();
+    let mut md = format!(
+        "\n## Robustness goal\n\nEach run's handed-over policy on the robustness card ({} \
+         episodes per disturbance, the reset seeds above). Goal rows: {}; a row is met when at \
+         least {num} of {den} episodes finish 50 m or stay up. Rates with Wilson 95 % \
+         intervals.\n\n| arm | runs carded | every goal row [95 %] | all but one [95 %] | goal \
+         rows met per run |\n|---|---:|---|---|---|\n",
+        study.file.eval.robustness_episodes,
+        labels.join(", ")
+    );
+    let arms: Vec<&str> = study
+        .file
+        .arms
+        .iter()
+        .map(|a| a.name.as_str())
+        .filter(|name| carded.iter().any(|r| r.arm == *name))
+        .collect();
+    for &arm in &arms {
+        let mine: Vec<&CardedRun> = carded.iter().filter(|r| r.arm == arm).collect();
+        let n = mine.len();
+        let every = mine.iter().filter(|r| r.goal.met == r.goal.rows).count();
+        let but_one = mine
+            .iter()
+            .filter(|r| r.goal.met + 1 >= r.goal.rows)
+            .count();
+        let (every_rate, but_one_rate) = (wilson(every, n, Z95)?, wilson(but_one, n, Z95)?);
+        let met: Vec<String> = mine
+            .iter()
+            .map(|r| format!("{}/{}", r.goal.met, r.goal.rows))
+            .collect();
+        md.push_str(&format!(
+            "| {arm} | {n} | {every} of {n}: {} | {but_one} of {n}: {} | {} |\n",
+            percent_interval(&every_rate, 0),
+            percent_interval(&but_one_rate, 0),
+            met.join(", ")
+        ));
+        let rows: Vec<Value> = labels
+            .iter()
+            .map(|label| {
+                let missed = mine
+                    .iter()
+                    .filter(|r| r.goal.missed.iter().any(|m| m.row == *label))
+                    .count();
+                json!({"row": label, "met": n - missed})
+            })
+            .collect();
+        json_arms.push(json!({
+            "arm": arm,
+            "runs": n,
+            "every_goal_row": every,
+            "every_goal_row_rate": every_rate,
+            "all_but_one": but_one,
+            "all_but_one_rate": but_one_rate,
+            "rows": rows,
+        }));
+    }
+    md.push_str(&format!(
+        "\n| goal row | {} |\n|---|{}\n",
+        arms.join(" | "),
+        "---:|".repeat(arms.len())
+    ));
+    for (i, label) in labels.iter().enumerate() {
+        let cells: Vec<String> = json_arms
+            .iter()
+            .map(|a| format!("{} of {}", a["rows"][i]["met"], a["runs"]))
+            .collect();
+        md.push_str(&format!("| {label} | {} |\n", cells.join(" | ")));
+    }
+    md.push_str("\n| run | goal rows met | missed |\n|---|---:|---|\n");
+    for r in carded {
+        md.push_str(&format!(
+            "| {}-s{} | {} of {} | {} |\n",
+            r.arm,
+            r.seed,
+            r.goal.met,
+            r.goal.rows,
+            if r.goal.missed.is_empty() {
+                "–".to_string()
+            } else {
+                let missed: Vec<String> = r.goal.missed.iter().map(|m| m.to_string()).collect();
+                missed.join("; ")
+            }
+        ));
+    }
+    Ok((md, json_arms))
 }
 
 /// "Probability of improvement" of every arm over every other, on Best-Win-50 and on
@@ -603,6 +722,80 @@ mod tests {
         assert!(lines[0].ends_with(",best_win_50,check_s"), "{csv}");
         assert!(lines[1].ends_with(",1000.0,50.00,120.4"), "{csv}");
         assert!(lines[2].ends_with(",1000.0,50.00,–"), "{csv}");
+    }
+
+    /// A carded run of `arm` missing the goal rows `missed` (labels) out of 12.
+    fn carded(arm: &str, seed: u64, missed: &[&str]) -> CardedRun {
+        CardedRun {
+            arm: arm.into(),
+            seed,
+            goal: GoalRows {
+                rows: 12,
+                met: 12 - missed.len(),
+                missed: missed
+                    .iter()
+                    .map(|m| esrl_eval::GoalMiss {
+                        row: m.to_string(),
+                        up: 7,
+                        episodes: 10,
+                    })
+                    .collect(),
+                absent: Vec::new(),
+            },
+        }
+    }
+
+    #[test]
+    fn the_robustness_section_counts_runs_meeting_every_goal_row_and_all_but_one() {
+        let study = Study::parse(
+            "seeds = 3\n[eval]\nrobustness_episodes = 10\n[[arm]]\nname = \"a\"\nagent = \
+             \"es-sac\"\n[[arm]]\nname = \"b\"\nagent = \"es-sac\"\n[[arm]]\nname = \"c\"\n\
+             agent = \"es-sac\"\n",
+        )
+        .unwrap();
+        let lateral = "push_lateral 0.5 m/s";
+        // Arm a: one run meets every row, one all but the lateral push, one misses two rows.
+        // Arm b: one run, missing the lateral push. Arm c: no card, no line.
+        let runs = [
+            carded("a", 0, &[]),
+            carded("a", 1, &[lateral]),
+            carded("a", 2, &[lateral, "slope -5 °"]),
+            carded("b", 0, &[lateral]),
+        ];
+        let (md, json) = robustness_section(&study, &runs).unwrap();
+        assert_eq!(json.len(), 2, "{md}");
+        assert_eq!(
+            (&json[0]["every_goal_row"], &json[0]["all_but_one"]),
+            (&1.into(), &2.into())
+        );
+        let every: Interval =
+            serde_json::from_value(json[0]["every_goal_row_rate"].clone()).unwrap();
+        assert_eq!(every, wilson(1, 3, Z95).unwrap());
+        assert!(
+            md.contains(
+                "| a | 3 | 1 of 3: 33 % [6–79 %] | 2 of 3: 67 % [21–94 %] | 12/12, 11/12, 10/12 |"
+            ),
+            "{md}"
+        );
+        assert!(
+            md.contains("| b | 1 | 0 of 1: 0 % [0–79 %] | 1 of 1: 100 % [21–100 %] | 11/12 |"),
+            "{md}"
+        );
+        // Per goal row, per arm: the runs that meet it.
+        assert!(md.contains("| goal row | a | b |"), "{md}");
+        assert!(
+            md.contains("| push_lateral 0.5 m/s | 1 of 3 | 0 of 1 |"),
+            "{md}"
+        );
+        assert!(md.contains("| slope -5 ° | 2 of 3 | 1 of 1 |"), "{md}");
+        assert!(md.contains("| friction 0.4 μ | 3 of 3 | 1 of 1 |"), "{md}");
+        assert!(
+            md.contains("| a-s2 | 10 of 12 | push_lateral 0.5 m/s: 7/10; slope -5 °: 7/10 |"),
+            "{md}"
+        );
+        assert!(md.contains("| a-s0 | 12 of 12 | – |"), "{md}");
+        // No card anywhere, no section.
+        assert_eq!(robustness_section(&study, &[]).unwrap().0, "");
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use super::{describe_eval, held_study, read_eval, Handover, Study, StudyEval, STUDY_FILE};
 use crate::runs::{check_config, run_state, train_all, Plan, RunState};
 use anyhow::{bail, Context, Result};
-use esrl_eval::{evaluate_with, load_run_pick, EvalOptions, Pick};
+use esrl_eval::{card, evaluate_with, goal_rows, load_run_pick, standard_set, EvalOptions, Pick};
 use esrl_run::checkpoint::{BEST, BEST_INFO};
 use esrl_run::run_dir::{write_atomic, write_json_atomic};
 use esrl_run::{RunDir, Summary};
@@ -193,6 +193,17 @@ fn write_record(run: &Path, record: &Path, eval: &StudyEval) -> Result<()> {
     )?;
     report.undisturbed = eval.undisturbed;
     report.default_starts = eval.default_starts;
+    if eval.robustness_episodes > 0 {
+        let rows = card(
+            &loaded,
+            eval.seed,
+            eval.robustness_episodes,
+            &standard_set(),
+            None,
+        )?;
+        report.robustness_goal = Some(goal_rows(&rows));
+        report.robustness = Some(rows);
+    }
     let tmp = record.with_extension("tmp");
     if tmp.exists() {
         fs::remove_dir_all(&tmp).with_context(|| format!("removing {}", tmp.display()))?;
