@@ -96,6 +96,14 @@ pub fn banner(cfg: &TrainConfig, root: &Path, resume: bool) -> String {
         }
     });
     let restart = cfg.restart.as_ref().map_or(String::new(), |r| {
+        if cfg.max_env_steps.is_some_and(|b| r.at_steps >= b) {
+            // `walker-robust` moves the rule past its budget to keep training the loaded walk.
+            return format!(
+                "\n  restart: never in this run (the rule is judged at {} env steps, past the \
+                 budget)",
+                r.at_steps
+            );
+        }
         format!(
             "\n  restart: from seed + 1000 (at most {} time(s)) when no walk and no check past \
              {} m by {} env steps{}",
@@ -380,4 +388,37 @@ fn progress_bar(total: usize, done: usize, display: Display) -> ProgressBar {
     );
     bar.set_position(done as u64);
     bar
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use esrl_run::restart::RestartConfig;
+    use esrl_run::{AgentKind, EnvKind, Preset};
+
+    #[test]
+    fn a_restart_rule_past_the_budget_is_said_never_to_fire() {
+        let mut cfg = TrainConfig::preset(AgentKind::EsSac, EnvKind::Walk, Preset::Walking);
+        cfg.max_env_steps = Some(1_500_000);
+        let line = |cfg: &TrainConfig| {
+            banner(cfg, Path::new("run"), false)
+                .lines()
+                .find(|l| l.trim_start().starts_with("restart:"))
+                .map(str::to_owned)
+        };
+        cfg.restart = Some(RestartConfig {
+            at_steps: 2_000_000,
+            ..RestartConfig::default()
+        });
+        let past = line(&cfg).expect("a restart line");
+        assert!(
+            past.contains("never in this run") && past.contains("2000000"),
+            "{past}"
+        );
+        cfg.restart = Some(RestartConfig::default());
+        let within = line(&cfg).expect("a restart line");
+        assert!(within.contains("by 1000000 env steps"), "{within}");
+        cfg.restart = None;
+        assert_eq!(line(&cfg), None);
+    }
 }
