@@ -417,10 +417,14 @@ fn robustness_section(study: &Study, carded: &[CardedRun]) -> Result<(String, Ve
     for &arm in &arms {
         let mine: Vec<&CardedRun> = carded.iter().filter(|r| r.arm == arm).collect();
         let n = mine.len();
-        let every = mine.iter().filter(|r| r.goal.met == r.goal.rows).count();
+        // A card without the goal's rows (another set) meets none of it.
+        let every = mine
+            .iter()
+            .filter(|r| r.goal.rows > 0 && r.goal.met == r.goal.rows)
+            .count();
         let but_one = mine
             .iter()
-            .filter(|r| r.goal.met + 1 >= r.goal.rows)
+            .filter(|r| r.goal.rows > 0 && r.goal.met + 1 >= r.goal.rows)
             .count();
         let (every_rate, but_one_rate) = (wilson(every, n, Z95)?, wilson(but_one, n, Z95)?);
         let met: Vec<String> = mine
@@ -796,6 +800,15 @@ mod tests {
         assert!(md.contains("| a-s0 | 12 of 12 | – |"), "{md}");
         // No card anywhere, no section.
         assert_eq!(robustness_section(&study, &[]).unwrap().0, "");
+        // A card without the goal's rows meets none of it.
+        let mut other = carded("c", 0, &[]);
+        other.goal.rows = 0;
+        other.goal.met = 0;
+        let (_, json) = robustness_section(&study, &[other]).unwrap();
+        assert_eq!(
+            (&json[0]["every_goal_row"], &json[0]["all_but_one"]),
+            (&0.into(), &0.into())
+        );
     }
 
     #[test]
