@@ -50,6 +50,17 @@ fn write_study(dir: &Path) -> String {
     p.to_str().unwrap().to_owned()
 }
 
+/// `esrl study run STUDY --out OUT`, which must fail; its stderr.
+fn study_refused(study: &Path, out: &Path) -> String {
+    fails(&[
+        "study",
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ])
+}
+
 /// Writes `text` as `dir/own.toml` and runs it with `esrl study run` into `dir/out`; returns
 /// the study file and the output folder.
 fn run_own_study(dir: &Path, text: &str) -> (std::path::PathBuf, std::path::PathBuf) {
@@ -283,13 +294,7 @@ fn a_study_folder_holds_one_study_and_bad_files_are_named() {
         ),
     ] {
         std::fs::write(&bad, text).unwrap();
-        let err = fails(&[
-            "study",
-            "run",
-            bad.to_str().unwrap(),
-            "--out",
-            tmp.path().join("x").to_str().unwrap(),
-        ]);
+        let err = study_refused(&bad, &tmp.path().join("x"));
         assert!(err.contains(want), "{text}: {err}");
     }
     let err = fails(&["study", "report", tmp.path().to_str().unwrap()]);
@@ -436,13 +441,7 @@ set = { init = "src-s{seed}" }
         );
     }
     std::fs::write(&study, text.replace("[0, 1]", "[2]")).unwrap();
-    let err = fails(&[
-        "study",
-        "run",
-        study.to_str().unwrap(),
-        "--out",
-        tmp.path().join("missing").to_str().unwrap(),
-    ]);
+    let err = study_refused(&study, &tmp.path().join("missing"));
     assert!(err.contains("src-s2"), "{err}");
 }
 
@@ -541,12 +540,6 @@ generations = 1
         ),
     )
     .unwrap();
-    let err = fails(&[
-        "study",
-        "run",
-        study.to_str().unwrap(),
-        "--out",
-        tmp.path().join("pendulum").to_str().unwrap(),
-    ]);
+    let err = study_refused(&study, &tmp.path().join("pendulum"));
     assert!(err.contains("robustness_episodes"), "{err}");
 }

@@ -14,7 +14,7 @@
 //! **The robustness goal** ([`goal_set`], [`goal_rows`]): pushes of 0.5 m/s every 5 s each
 //! way, ground friction 0.4–1.2, ±20 % mass and motor strength and ±5° slopes, each row
 //! finished or stayed up in at least 9 of 10 episodes ([`GOAL_SHARE`]). The card says which
-//! of these rows a policy meets and which it misses; a study with `[eval] robustness` counts
+//! of these rows a policy meets and which it misses; a study with `[eval] robustness_episodes` counts
 //! the runs that meet each, and all of them, with intervals.
 
 use crate::disturbance::{CardRow, Disturbance};
